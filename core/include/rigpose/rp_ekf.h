@@ -1,0 +1,75 @@
+/*
+ * rp_ekf.h - the 12-state pose EKF of the paper (section 2.1), made numerically careful.
+ *
+ * State x = [tx ty tz alpha beta gamma | their time derivatives] (m, rad, m/s, rad/s).
+ * Plant: constant velocity, x+ = F x with F = [I dt I; 0 I], driven by white acceleration noise
+ * (continuous spectral densities q_trans (m^2/s^3) and q_rot (rad^2/s^3)).
+ * Measurement: the pixel of each tracked feature through eqs. (1)-(2) (rp_rig_project).
+ * Update: iterated EKF (Gauss-Newton on the posterior, `iterations` relinearisations), computed
+ * in information form (the sum of H^T R^-1 H over features is 6x6, whatever their number), so
+ * the covariance stays symmetric positive definite by construction; a Mahalanobis gate
+ * rejects outlier features before the final iteration.
+ */
+#ifndef RP_EKF_H
+#define RP_EKF_H
+
+#include "rp_obs.h"
+#include "rp_opts.h"
+#include "rp_rig.h"
+#include "rp_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define RP_EKF_N 12
+
+typedef struct {
+    rp_real sigma_px;  /* measurement noise per pixel coordinate (1-sigma), pixels */
+    rp_real q_trans;   /* plant: translational acceleration noise density, m^2/s^3 */
+    rp_real q_rot;     /* plant: angular acceleration noise density, rad^2/s^3 */
+    rp_real gate_chi2; /* per-feature 2-dof gate on the Mahalanobis distance (e.g. 13.8: 99.9%);
+                        * <= 0 disables gating */
+    uint8_t iterations;/* Gauss-Newton iterations of the update, >= 1 (1 = plain EKF) */
+    uint16_t min_features; /* fewer accepted features than this: no update (RP_E_TOO_FEW) */
+} rp_ekf_params_t;
+
+/* Defaults for 0.5 px noise and a hand-held / robot motion at ~30 Hz. */
+rp_ekf_params_t rp_ekf_default_params(void);
+
+typedef struct {
+    rp_real x[RP_EKF_N];            /* state */
+    rp_real P[RP_EKF_N * RP_EKF_N]; /* covariance, row-major */
+    rp_ekf_params_t prm;
+} rp_ekf_t;
+
+typedef struct {
+    uint16_t n_used;   /* features that entered the final update */
+    uint16_t n_gated;  /* features rejected by the gate */
+    uint16_t n_bad;    /* features rejected as unprojectable (behind camera, non-finite) */
+    rp_real rms_px;    /* RMS reprojection residual of the used features after the update */
+    uint8_t cov_reset; /* 1 if the covariance had to be reset (numerical fault) */
+} rp_ekf_info_t;
+
+/* Start the filter at x0 with diagonal covariance P0diag. RP_E_ARG (bad params: sigma_px <= 0,
+ * iterations 0, negative noise), RP_E_NAN. */
+rp_status_t rp_ekf_init(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real x0[RP_EKF_N],
+                        const rp_real P0diag[RP_EKF_N]);
+
+/* Time update over dt seconds (dt > 0, finite; else RP_E_ARG and no change). */
+rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt);
+
+/* Measurement update with n observations. `used` (n bytes, may be NULL) receives 1 for each
+ * observation used, 0 for one gated or unprojectable. info may be NULL.
+ * Returns RP_OK; RP_E_TOO_FEW (fewer than prm.min_features usable; the state is left as
+ * predicted); RP_E_DIVERGED (the update produced a non-finite state or a covariance that is not
+ * positive definite: the update is discarded, the covariance reset to its predicted value made
+ * symmetric and inflated, info->cov_reset set); RP_E_ARG. In every case the filter stays usable. */
+rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
+                          uint8_t *used, rp_ekf_info_t *info);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_EKF_H */

@@ -1,0 +1,58 @@
+/*
+ * rp_frame.h - what flows between the front end and the estimators: a frame set of tracked
+ * features from all cameras, and a pose estimate with its health flags.
+ */
+#ifndef RP_FRAME_H
+#define RP_FRAME_H
+
+#include "rp_opts.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One tracked feature in one camera. Ids are unique across the rig: a feature matched between
+ * the two cameras of a stereo pair carries the same id in both. A track that is lost and found
+ * again gets a new id from the front end. */
+typedef struct {
+    uint32_t id;   /* track id */
+    rp_real uv[2]; /* pixel position (u, v), distorted (as seen in the image), pixels */
+} rp_feat_t;
+
+/* Synchronised features of all cameras at one instant. Camera k's features are
+ * f[k][0 .. n[k]-1]; a camera with no image this time has n[k] = 0. */
+typedef struct {
+    int64_t utime;                 /* capture time, microseconds */
+    uint16_t n[RP_MAX_CAMS];       /* features per camera */
+    rp_feat_t f[RP_MAX_CAMS][RP_MAX_FEATS_PER_CAM];
+} rp_frameset_t;
+
+/* Estimator health and events, as flags (published as they are). */
+enum {
+    RP_EST_INITIALISING = 1u << 0, /* first frame: structure built, pose is the prior */
+    RP_EST_TRACKING     = 1u << 1, /* pose updated from tracked features this frame */
+    RP_EST_REINIT       = 1u << 2, /* landmarks re-initialised this frame (backtracked one frame) */
+    RP_EST_DEGRADED     = 1u << 3, /* fewer features than wanted, or some cameras without any */
+    RP_EST_LOST         = 1u << 4, /* no update possible: pose is the prediction only */
+    RP_EST_GATED        = 1u << 5, /* some measurements rejected as outliers (Mahalanobis gate) */
+    RP_EST_COV_RESET    = 1u << 6, /* numerical fault: the covariance was reset */
+    RP_EST_SCALE_WEAK   = 1u << 7  /* metric scale poorly determined (non-overlapping layouts) */
+};
+
+typedef struct {
+    int64_t utime;              /* time of the frame set, microseconds */
+    uint32_t frame;             /* frame index since start */
+    rp_real p[6];               /* pose [tx ty tz alpha beta gamma] of cam1 in the world, m, rad */
+    rp_real v[6];               /* its time derivative, m/s and rad/s */
+    rp_real cov[36];            /* 6x6 covariance of p, row-major */
+    uint32_t flags;             /* RP_EST_* */
+    uint16_t n_used[RP_MAX_CAMS]; /* features used in the update, per camera */
+    uint16_t n_gated;           /* measurements rejected by the gate */
+    uint16_t n_landmarks;       /* 3-D points held */
+} rp_estimate_t;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_FRAME_H */

@@ -1,0 +1,17 @@
+/*
+ * rp_obs.h - a 2-D/3-D correspondence: world point M seen by camera `cam` at pixel uv.
+ * The measurement unit of Lowe's method and of the pose EKF.
+ */
+#ifndef RP_OBS_H
+#define RP_OBS_H
+
+#include "rp_opts.h"
+
+typedef struct {
+    rp_real uv[2];  /* measured pixel (distorted), pixels */
+    rp_real M[3];   /* world point, m */
+    rp_real w;      /* weight: the measurement's standard deviation is sigma_px / sqrt(w); 1 = nominal */
+    uint8_t cam;    /* camera index in the rig */
+} rp_obs_t;
+
+#endif /* RP_OBS_H */

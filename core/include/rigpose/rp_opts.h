@@ -1,0 +1,72 @@
+/*
+ * rp_opts.h - every compile-time limit and numeric choice of the core, in one place.
+ *
+ * Each value has an #ifndef default that a build may override with -D (the Makefile does, for
+ * the float/double variants and the board build). Invariants are checked with _Static_assert.
+ */
+#ifndef RP_OPTS_H
+#define RP_OPTS_H
+
+#include <stdint.h>
+
+/* ---- scalar type of the estimator ------------------------------------------------------- */
+/* RP_REAL_IS_FLOAT=1: float (the board's default); 0: double (the host's default). */
+#ifndef RP_REAL_IS_FLOAT
+#define RP_REAL_IS_FLOAT 0
+#endif
+
+#if RP_REAL_IS_FLOAT
+typedef float rp_real;
+#define RP_REAL_EPS 1.1920929e-7f
+#else
+typedef double rp_real;
+#define RP_REAL_EPS 2.220446049250313e-16
+#endif
+
+/* A literal of the scalar type: RP_C(0.5) is 0.5f in float builds, no double promotion. */
+#define RP_C(x) ((rp_real)(x))
+
+/* Linear-algebra backend: 1 = C++ shim over Eigen fixed-size matrices, 0 = plain C. */
+#ifndef RP_LINALG_EIGEN
+#define RP_LINALG_EIGEN 1
+#endif
+
+/* ---- sizes --------------------------------------------------------------------------------- */
+/* Cameras on one rig (the paper's simulation uses 6: 4 single cameras + 2 stereo partners). */
+#ifndef RP_MAX_CAMS
+#define RP_MAX_CAMS 6
+#endif
+
+/* Stereo pairs on one rig. */
+#ifndef RP_MAX_PAIRS
+#define RP_MAX_PAIRS 2
+#endif
+
+/* Tracked features per camera per frame. */
+#ifndef RP_MAX_FEATS_PER_CAM
+#define RP_MAX_FEATS_PER_CAM 512
+#endif
+
+/* 3-D landmarks one estimator holds at once (all pairs / cameras together). */
+#ifndef RP_MAX_LANDMARKS
+#define RP_MAX_LANDMARKS 2048
+#endif
+
+/* Largest row or column count a decomposition (Cholesky, QR, SVD) accepts. */
+#ifndef RP_LA_MAX_DIM
+#define RP_LA_MAX_DIM 16
+#endif
+
+/* Smallest depth (m, along the camera's z axis) at which a point counts as in front. */
+#ifndef RP_MIN_DEPTH
+#define RP_MIN_DEPTH 1e-3
+#endif
+
+_Static_assert(RP_MAX_CAMS >= 1 && RP_MAX_CAMS <= 16, "RP_MAX_CAMS out of range");
+_Static_assert(RP_MAX_PAIRS * 2 <= RP_MAX_CAMS, "each stereo pair needs two cameras");
+_Static_assert(RP_MAX_FEATS_PER_CAM >= 8 && RP_MAX_FEATS_PER_CAM <= 65535, "feature limit");
+_Static_assert(RP_MAX_LANDMARKS >= RP_MAX_FEATS_PER_CAM, "landmark table smaller than a camera");
+_Static_assert((RP_MAX_LANDMARKS & (RP_MAX_LANDMARKS - 1)) == 0, "RP_MAX_LANDMARKS: power of 2");
+_Static_assert(RP_LA_MAX_DIM >= 12, "the pose EKF needs 12x12 decompositions");
+
+#endif /* RP_OPTS_H */

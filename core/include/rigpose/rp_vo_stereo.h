@@ -1,0 +1,91 @@
+/*
+ * rp_vo_stereo.h - the overlapping layout (paper section 2.2.1): stereo pairs, one pose EKF.
+ *
+ * Per frame set:
+ *  1. At the first frame, and whenever a pair's tracked landmarks fall under min_tracked, the
+ *     pair's matches (a feature id present in both of its cameras) are checked against the
+ *     fixed fundamental matrix, triangulated, checked (depth range, reprojection error in both
+ *     cameras) and stored as world landmarks. A re-initialisation backtracks one frame, as the
+ *     paper does: it triangulates the previous frame set's matches at the previous pose
+ *     estimate, then processes the current frame with them.
+ *  2. At the second frame the pose EKF is started from Lowe's method on all correspondences.
+ *  3. Every later frame: EKF prediction, then the iterated update with the pixels of every
+ *     tracked landmark in every camera of the layout (eqs. 1-2).
+ *  A landmark missing from a frame (its track lost in both cameras) is dropped for good.
+ */
+#ifndef RP_VO_STEREO_H
+#define RP_VO_STEREO_H
+
+#include "rp_ekf.h"
+#include "rp_frame.h"
+#include "rp_lowe.h"
+#include "rp_obs.h"
+#include "rp_rig.h"
+#include "rp_stereo.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    uint8_t n_pairs;                /* 1..RP_MAX_PAIRS */
+    uint8_t pair_a[RP_MAX_PAIRS];   /* first camera of each pair */
+    uint8_t pair_b[RP_MAX_PAIRS];   /* second camera of each pair */
+    rp_ekf_params_t ekf;
+    uint16_t min_tracked;           /* per pair: re-initialise under this many landmarks (50) */
+    rp_real max_epipolar_px;        /* reject a match farther from its epipolar line, pixels */
+    rp_real min_depth_m;            /* accepted triangulated depth range (camera a's z), m */
+    rp_real max_depth_m;
+    rp_real max_reproj_px;          /* reject a triangulation with a larger reprojection error */
+    rp_real default_dt_s;           /* frame interval used when timestamps are missing, s */
+} rp_vo_stereo_cfg_t;
+
+/* Defaults: the paper's threshold of 50, 1.5 px epipolar band, 0.05..100 m, 1.5 px, 1/30 s. */
+rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
+
+typedef struct {
+    uint32_t id;    /* feature id; RP_VO_EMPTY_ID marks a free hash slot */
+    uint8_t pair;   /* pair that triangulated it */
+    uint8_t seen;   /* scratch: seen in the current frame */
+    uint8_t tomb;   /* deleted (hash tombstone) */
+    rp_real M[3];   /* world position, m */
+} rp_landmark_t;
+
+#define RP_VO_EMPTY_ID 0xFFFFFFFFu
+
+typedef struct {
+    const rp_rig_t *rig;
+    rp_vo_stereo_cfg_t cfg;
+    rp_stereo_pair_t pair[RP_MAX_PAIRS];
+    rp_ekf_t ekf;
+    rp_landmark_t lm[RP_MAX_LANDMARKS]; /* open-addressing hash table keyed by id */
+    uint16_t n_lm;                      /* live landmarks */
+    uint16_t n_lm_pair[RP_MAX_PAIRS];   /* live landmarks per pair */
+    uint16_t n_tomb;                    /* tombstones */
+    rp_frameset_t prev;                 /* previous frame set, for backtracking */
+    rp_real prev_p[6];                  /* pose estimate at the previous frame */
+    uint32_t frame;                     /* frames processed */
+    int64_t prev_utime;
+    rp_obs_t obs[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: this frame's observations */
+    uint8_t used[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];
+} rp_vo_stereo_t;
+
+/* Set up the estimator for rig (which must outlive it) with cfg. The world is cam1's frame at
+ * the first frame set. RP_E_ARG (bad config: no pair, camera index out of range, a camera in
+ * two pairs), rp_rig_check's errors, rp_stereo_pair_init's errors. */
+rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
+                              const rp_vo_stereo_cfg_t *cfg);
+
+/* Process one frame set; fills est (never NULL) whatever happens.
+ * RP_OK: pose updated, or first frame initialised (est->flags say which).
+ * RP_E_TOO_FEW: no usable structure or too few features: est carries the prediction with
+ *   RP_EST_LOST; the next frame set tries to re-initialise.
+ * RP_E_NAN / RP_E_ARG: the frame set was malformed (non-finite pixel, count over the limit);
+ *   the offending features are skipped when possible, otherwise the frame set is ignored. */
+rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_VO_STEREO_H */

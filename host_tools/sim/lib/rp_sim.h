@@ -1,0 +1,76 @@
+/*
+ * rp_sim.h - the paper's simulation protocol (Table 1), as DESIGN.md fixes it, for the
+ * simulator, the benchmarks and the tests. Host code (may allocate), links the core only.
+ *
+ * Six cameras, all 640x480 with fx = fy = focal_px and the principal point at the centre:
+ *   RP_SIM_CAM1  front, at the origin, looking +z (the reference camera)
+ *   RP_SIM_CAM2  at (+0.0866, 0, -0.05), looking +x
+ *   RP_SIM_CAM3  at (0, 0, -0.1), looking -z
+ *   RP_SIM_CAM4  at (-0.0866, 0, -0.05), looking -x
+ *   RP_SIM_CAM1B at (0.1, 0, 0), cam1's orientation: cam1's stereo partner
+ *   RP_SIM_CAM3B at (0.1, 0, -0.1), cam3's orientation: cam3's stereo partner
+ * n_points points uniformly in the spherical shell r_in..r_out around the start. Per frame the
+ * rig moves by a translation per world axis of magnitude U[t_min, t_max] with random sign and
+ * a rotation per angle of magnitude U[a_min, a_max] with random sign, composed in the rig's
+ * frame: R_j = R_{j-1} Rz(dg) Ry(db) Rx(da). A point is visible to a camera when it is at
+ * least min_depth in front and projects inside the image. Pixel noise: Gaussian, noise_px.
+ * Everything is a function of (seed, run index): runs can be computed in any order.
+ */
+#ifndef RP_SIM_H
+#define RP_SIM_H
+
+#include <stdint.h>
+
+#include "rigpose/rp_frame.h"
+#include "rigpose/rp_rig.h"
+
+enum { RP_SIM_CAM1 = 0, RP_SIM_CAM2, RP_SIM_CAM3, RP_SIM_CAM4, RP_SIM_CAM1B, RP_SIM_CAM3B,
+       RP_SIM_NCAMS };
+
+typedef struct {
+    uint32_t n_points;     /* 10000 */
+    double r_in, r_out;    /* 0.667, 1.0 m */
+    double focal_px;       /* 800 */
+    uint16_t width, height;/* 640, 480 */
+    double noise_px;       /* 0.5 */
+    double t_min, t_max;   /* 0.005, 0.015 m per frame per axis */
+    double a_min, a_max;   /* 0.005, 0.02 rad per frame per angle */
+    double min_depth;      /* 0.05 m */
+    double frame_dt;       /* 1/30 s (timestamps only) */
+    uint32_t n_frames;     /* 100 */
+} rp_sim_cfg_t;
+
+void rp_sim_default_cfg(rp_sim_cfg_t *cfg);
+
+/* The six-camera rig of the protocol. */
+void rp_sim_make_rig(const rp_sim_cfg_t *cfg, rp_rig_t *rig);
+
+typedef struct {
+    rp_sim_cfg_t cfg;
+    uint64_t seed;
+    uint32_t run;
+    double *points;   /* n_points x 3, world, m */
+    double *truth;    /* n_frames x 6: [tx ty tz alpha beta gamma] of cam1 per frame */
+    double *truth_R;  /* n_frames x 9: R_j (exact, accumulated; angles are extracted from it) */
+    rp_rig_t rig;
+} rp_sim_run_t;
+
+/* Make run `run` of the experiment seeded by `seed`: the point cloud and the trajectory.
+ * Returns 0, or -1 if memory ran out. */
+int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, uint32_t run);
+void rp_sim_run_free(rp_sim_run_t *sr);
+
+/* The noisy features of frame j in all six cameras (ids = point index; the same point carries
+ * the same id in every camera that sees it). The noise is a function of (seed, run, j) only.
+ * A camera that sees more than RP_MAX_FEATS_PER_CAM points keeps the nearest ones.
+ * utime = j * frame_dt. Returns the total feature count. */
+uint32_t rp_sim_frame(const rp_sim_run_t *sr, uint32_t j, rp_frameset_t *fs);
+
+/* Deterministic generator used by the simulation (splitmix64 seeding xoshiro256**). */
+typedef struct { uint64_t s[4]; } rp_rng_t;
+void rp_rng_seed(rp_rng_t *r, uint64_t seed);
+uint64_t rp_rng_next(rp_rng_t *r);
+double rp_rng_uniform(rp_rng_t *r);   /* [0, 1) */
+double rp_rng_gauss(rp_rng_t *r);     /* N(0, 1) */
+
+#endif /* RP_SIM_H */
