@@ -47,7 +47,8 @@ typedef struct {
     uint16_t n_used;   /* features that entered the final update */
     uint16_t n_gated;  /* features rejected by the gate */
     uint16_t n_bad;    /* features rejected as unprojectable (behind camera, non-finite) */
-    rp_real rms_px;    /* RMS reprojection residual of the used features after the update */
+    rp_real rms_px;    /* RMS residual per pixel coordinate of the used features, at the last
+                        * linearisation point (pixels) */
     uint8_t cov_reset; /* 1 if the covariance had to be reset (numerical fault) */
 } rp_ekf_info_t;
 

@@ -44,10 +44,9 @@ typedef struct {
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
 
 typedef struct {
-    uint32_t id;    /* feature id; RP_VO_EMPTY_ID marks a free hash slot */
+    uint32_t id;    /* feature id; RP_VO_EMPTY_ID marks a free slot */
     uint8_t pair;   /* pair that triangulated it */
-    uint8_t seen;   /* scratch: seen in the current frame */
-    uint8_t tomb;   /* deleted (hash tombstone) */
+    uint8_t seen;   /* scratch: observed (and not gated) in the current frame */
     rp_real M[3];   /* world position, m */
 } rp_landmark_t;
 
@@ -58,16 +57,19 @@ typedef struct {
     rp_vo_stereo_cfg_t cfg;
     rp_stereo_pair_t pair[RP_MAX_PAIRS];
     rp_ekf_t ekf;
-    rp_landmark_t lm[RP_MAX_LANDMARKS]; /* open-addressing hash table keyed by id */
-    uint16_t n_lm;                      /* live landmarks */
-    uint16_t n_lm_pair[RP_MAX_PAIRS];   /* live landmarks per pair */
-    uint16_t n_tomb;                    /* tombstones */
+    rp_landmark_t lm[RP_MAX_LANDMARKS]; /* hash table keyed by id: linear probing with
+                                         * backward-shift deletion, at most 3/4 full */
+    uint16_t n_lm;                      /* landmarks held */
+    uint16_t n_lm_pair[RP_MAX_PAIRS];   /* landmarks held per pair */
     rp_frameset_t prev;                 /* previous frame set, for backtracking */
     rp_real prev_p[6];                  /* pose estimate at the previous frame */
     uint32_t frame;                     /* frames processed */
     int64_t prev_utime;
     rp_obs_t obs[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: this frame's observations */
     uint8_t used[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];
+    uint32_t obs_id[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: landmark id of obs[i] */
+    uint32_t match_key[2 * RP_MAX_FEATS_PER_CAM];        /* scratch: id -> feature index map */
+    uint16_t match_idx[2 * RP_MAX_FEATS_PER_CAM];        /*   of one camera, for matching */
 } rp_vo_stereo_t;
 
 /* Set up the estimator for rig (which must outlive it) with cfg. The world is cam1's frame at

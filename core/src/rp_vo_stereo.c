@@ -1,0 +1,512 @@
+/*
+ * rp_vo_stereo.c - the overlapping (stereo) layout of the paper, section 2.2.1.
+ * See rp_vo_stereo.h for the algorithm; the step numbers below are the paper's.
+ */
+#include <string.h>
+
+#include "priv/rp_math.h"
+#include "rigpose/rp_vo_stereo.h"
+
+#define LM_CAP RP_MAX_LANDMARKS
+#define LM_MAX_FILL ((LM_CAP / 4) * 3)
+#define MATCH_CAP (2 * RP_MAX_FEATS_PER_CAM)
+
+/* Prior standard deviations of the velocity when the filter starts (m/s, rad/s). */
+#define START_SIGMA_V RP_C(1.0)
+#define START_SIGMA_W RP_C(1.0)
+
+rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
+{
+    rp_vo_stereo_cfg_t c;
+    memset(&c, 0, sizeof(c));
+    c.ekf = rp_ekf_default_params();
+    c.min_tracked = 50;
+    c.max_epipolar_px = RP_C(1.5);
+    c.min_depth_m = RP_C(0.05);
+    c.max_depth_m = RP_C(100.0);
+    c.max_reproj_px = RP_C(1.5);
+    c.default_dt_s = RP_C(1.0) / RP_C(30.0);
+    return c;
+}
+
+/* ---- landmark table (hash on id, linear probing, backward-shift deletion) ----------------- */
+
+static uint32_t hash_id(uint32_t id)
+{
+    id ^= id >> 16;
+    id *= 0x7feb352dU;
+    id ^= id >> 15;
+    id *= 0x846ca68bU;
+    id ^= id >> 16;
+    return id;
+}
+
+static rp_landmark_t *lm_find(rp_vo_stereo_t *vo, uint32_t id)
+{
+    uint32_t i = hash_id(id) & (LM_CAP - 1);
+    while (vo->lm[i].id != RP_VO_EMPTY_ID) {
+        if (vo->lm[i].id == id) {
+            return &vo->lm[i];
+        }
+        i = (i + 1) & (LM_CAP - 1);
+    }
+    return NULL;
+}
+
+static rp_status_t lm_insert(rp_vo_stereo_t *vo, uint32_t id, uint8_t pair, const rp_real M[3])
+{
+    if (vo->n_lm >= LM_MAX_FILL) {
+        return RP_E_FULL;
+    }
+    uint32_t i = hash_id(id) & (LM_CAP - 1);
+    while (vo->lm[i].id != RP_VO_EMPTY_ID) {
+        if (vo->lm[i].id == id) {
+            return RP_E_ARG; /* already held */
+        }
+        i = (i + 1) & (LM_CAP - 1);
+    }
+    rp_landmark_t *l = &vo->lm[i];
+    l->id = id;
+    l->pair = pair;
+    l->seen = 0;
+    memcpy(l->M, M, sizeof(l->M));
+    vo->n_lm++;
+    vo->n_lm_pair[pair]++;
+    return RP_OK;
+}
+
+/* Remove slot i, shifting later members of its probe run back so lookups stay correct. */
+static void lm_remove_slot(rp_vo_stereo_t *vo, uint32_t i)
+{
+    vo->n_lm--;
+    vo->n_lm_pair[vo->lm[i].pair]--;
+    uint32_t hole = i;
+    uint32_t j = i;
+    for (;;) {
+        j = (j + 1) & (LM_CAP - 1);
+        if (vo->lm[j].id == RP_VO_EMPTY_ID) {
+            break;
+        }
+        uint32_t home = hash_id(vo->lm[j].id) & (LM_CAP - 1);
+        /* j may move to the hole if its home is not cyclically inside (hole, j]. */
+        int in_range = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+        if (!in_range) {
+            vo->lm[hole] = vo->lm[j];
+            hole = j;
+        }
+    }
+    vo->lm[hole].id = RP_VO_EMPTY_ID;
+}
+
+static void lm_clear(rp_vo_stereo_t *vo)
+{
+    for (uint32_t i = 0; i < LM_CAP; ++i) {
+        vo->lm[i].id = RP_VO_EMPTY_ID;
+    }
+    vo->n_lm = 0;
+    memset(vo->n_lm_pair, 0, sizeof(vo->n_lm_pair));
+}
+
+/* Drop every landmark not seen this frame, and clear the marks of the others. */
+static void lm_drop_unseen(rp_vo_stereo_t *vo)
+{
+    uint32_t i = 0;
+    while (i < LM_CAP) {
+        rp_landmark_t *l = &vo->lm[i];
+        if (l->id != RP_VO_EMPTY_ID && !l->seen) {
+            lm_remove_slot(vo, i);
+            continue; /* slot i now holds a shifted entry (or is empty): look again */
+        }
+        ++i;
+    }
+    for (i = 0; i < LM_CAP; ++i) {
+        vo->lm[i].seen = 0;
+    }
+}
+
+/* ---- set-up ------------------------------------------------------------------------------ */
+
+rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
+                              const rp_vo_stereo_cfg_t *cfg)
+{
+    if (!vo || !rig || !cfg) {
+        return RP_E_ARG;
+    }
+    rp_status_t st = rp_rig_check(rig);
+    if (st != RP_OK) {
+        return st;
+    }
+    if (cfg->n_pairs < 1 || cfg->n_pairs > RP_MAX_PAIRS || cfg->min_tracked < 6 ||
+        !(cfg->max_epipolar_px > RP_C(0.0)) || !(cfg->min_depth_m > RP_C(0.0)) ||
+        !(cfg->max_depth_m > cfg->min_depth_m) || !(cfg->max_reproj_px > RP_C(0.0)) ||
+        !(cfg->default_dt_s > RP_C(0.0))) {
+        return RP_E_ARG;
+    }
+    uint8_t in_use[RP_MAX_CAMS] = {0};
+    for (uint8_t k = 0; k < cfg->n_pairs; ++k) {
+        uint8_t a = cfg->pair_a[k], b = cfg->pair_b[k];
+        if (a >= rig->n_cams || b >= rig->n_cams || a == b || in_use[a] || in_use[b]) {
+            return RP_E_ARG;
+        }
+        in_use[a] = in_use[b] = 1;
+    }
+    memset(vo, 0, sizeof(*vo));
+    vo->rig = rig;
+    vo->cfg = *cfg;
+    for (uint8_t k = 0; k < cfg->n_pairs; ++k) {
+        st = rp_stereo_pair_init(rig, cfg->pair_a[k], cfg->pair_b[k], &vo->pair[k]);
+        if (st != RP_OK) {
+            return st;
+        }
+    }
+    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
+    for (int i = 0; i < RP_EKF_N; ++i) {
+        P0[i] = RP_C(1.0);
+    }
+    st = rp_ekf_init(&vo->ekf, &cfg->ekf, x0, P0);
+    if (st != RP_OK) {
+        return st;
+    }
+    lm_clear(vo);
+    return RP_OK;
+}
+
+/* ---- step (1): match, check against F, triangulate, check, store ------------------------- */
+
+static void match_map_build(rp_vo_stereo_t *vo, const rp_frameset_t *fs, uint8_t cam)
+{
+    for (uint32_t i = 0; i < MATCH_CAP; ++i) {
+        vo->match_key[i] = RP_VO_EMPTY_ID;
+    }
+    for (uint16_t f = 0; f < fs->n[cam]; ++f) {
+        uint32_t id = fs->f[cam][f].id;
+        uint32_t i = hash_id(id) & (MATCH_CAP - 1);
+        while (vo->match_key[i] != RP_VO_EMPTY_ID && vo->match_key[i] != id) {
+            i = (i + 1) & (MATCH_CAP - 1);
+        }
+        vo->match_key[i] = id;
+        vo->match_idx[i] = f;
+    }
+}
+
+static int match_map_find(const rp_vo_stereo_t *vo, uint32_t id, uint16_t *idx)
+{
+    uint32_t i = hash_id(id) & (MATCH_CAP - 1);
+    while (vo->match_key[i] != RP_VO_EMPTY_ID) {
+        if (vo->match_key[i] == id) {
+            *idx = vo->match_idx[i];
+            return 1;
+        }
+        i = (i + 1) & (MATCH_CAP - 1);
+    }
+    return 0;
+}
+
+/* 1 if feature `id` is in either camera of pair sp in frame set fs. */
+static int tracked_in(const rp_frameset_t *fs, const rp_stereo_pair_t *sp, uint32_t id)
+{
+    for (uint8_t c = 0; c < 2; ++c) {
+        uint8_t cam = c == 0 ? sp->a : sp->b;
+        for (uint16_t g = 0; g < fs->n[cam]; ++g) {
+            if (fs->f[cam][g].id == id) {
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* Triangulate the matches of pair k in frame set fs at pose p and add them as landmarks.
+ * If `only_in` is given, a match is used only when its id is also in that frame set (a
+ * backtracked re-initialisation only wants features still tracked now). Returns how many
+ * were added. */
+static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_frameset_t *fs,
+                                 const rp_real p[6], const rp_frameset_t *only_in)
+{
+    const rp_stereo_pair_t *sp = &vo->pair[k];
+    const rp_vo_stereo_cfg_t *cfg = &vo->cfg;
+    rp_pose_lin_t pl;
+    if (rp_pose_lin_set(&pl, p) != RP_OK) {
+        return 0;
+    }
+    uint16_t added = 0;
+    match_map_build(vo, fs, sp->b);
+    for (uint16_t f = 0; f < fs->n[sp->a]; ++f) {
+        const rp_feat_t *fa = &fs->f[sp->a][f];
+        uint16_t jb;
+        if (fa->id == RP_VO_EMPTY_ID || !match_map_find(vo, fa->id, &jb) ||
+            lm_find(vo, fa->id) != NULL) {
+            continue;
+        }
+        const rp_feat_t *fb = &fs->f[sp->b][jb];
+        if (!rp_all_finite(fa->uv, 2) || !rp_all_finite(fb->uv, 2) ||
+            (only_in && !tracked_in(only_in, sp, fa->id))) {
+            continue;
+        }
+        rp_real epi, Pa[3], reproj, M[3];
+        if (rp_stereo_epipolar_px(vo->rig, sp, fa->uv, fb->uv, &epi) != RP_OK ||
+            epi > cfg->max_epipolar_px) {
+            continue;
+        }
+        if (rp_stereo_triangulate(vo->rig, sp, fa->uv, fb->uv, Pa, &reproj) != RP_OK ||
+            reproj > cfg->max_reproj_px || Pa[2] < cfg->min_depth_m || Pa[2] > cfg->max_depth_m) {
+            continue;
+        }
+        if (rp_rig_world_point(vo->rig, sp->a, &pl, Pa, M) != RP_OK) {
+            continue;
+        }
+        if (lm_insert(vo, fa->id, k, M) != RP_OK) {
+            break; /* table full: keep what we have */
+        }
+        added++;
+    }
+    return added;
+}
+
+/* ---- measurements ------------------------------------------------------------------------ */
+
+static int cam_in_layout(const rp_vo_stereo_t *vo, uint8_t cam)
+{
+    for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+        if (vo->pair[k].a == cam || vo->pair[k].b == cam) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Gather the observations of held landmarks in fs into vo->obs; marks them seen. */
+static uint32_t gather_obs(rp_vo_stereo_t *vo, const rp_frameset_t *fs)
+{
+    uint32_t n = 0;
+    for (uint8_t cam = 0; cam < vo->rig->n_cams && cam < RP_MAX_CAMS; ++cam) {
+        if (!cam_in_layout(vo, cam)) {
+            continue;
+        }
+        for (uint16_t f = 0; f < fs->n[cam]; ++f) {
+            const rp_feat_t *ft = &fs->f[cam][f];
+            if (!rp_all_finite(ft->uv, 2)) {
+                continue;
+            }
+            rp_landmark_t *l = lm_find(vo, ft->id);
+            if (!l) {
+                continue;
+            }
+            rp_obs_t *o = &vo->obs[n];
+            o->uv[0] = ft->uv[0];
+            o->uv[1] = ft->uv[1];
+            memcpy(o->M, l->M, sizeof(o->M));
+            o->w = RP_C(1.0);
+            o->cam = cam;
+            vo->obs_id[n] = ft->id;
+            n++;
+        }
+    }
+    return n;
+}
+
+static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uint32_t flags,
+                          rp_estimate_t *est)
+{
+    est->utime = fs ? fs->utime : vo->prev_utime;
+    est->frame = vo->frame;
+    for (int i = 0; i < 6; ++i) {
+        est->p[i] = vo->ekf.x[i];
+        est->v[i] = vo->ekf.x[6 + i];
+        for (int j = 0; j < 6; ++j) {
+            est->cov[i * 6 + j] = vo->ekf.P[i * RP_EKF_N + j];
+        }
+    }
+    est->flags = flags;
+    est->n_landmarks = vo->n_lm;
+}
+
+static rp_status_t validate_frameset(const rp_vo_stereo_t *vo, const rp_frameset_t *fs)
+{
+    for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        if (fs->n[cam] > RP_MAX_FEATS_PER_CAM) {
+            return RP_E_ARG;
+        }
+        if (cam >= vo->rig->n_cams && fs->n[cam] != 0) {
+            return RP_E_ARG;
+        }
+    }
+    return RP_OK;
+}
+
+/* ---- the step ---------------------------------------------------------------------------- */
+
+static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    /* Step (1) at frame 0: the world is cam1's frame now, so the pose is exactly zero. */
+    static const rp_real zero[6] = {0};
+    lm_clear(vo);
+    uint16_t added = 0;
+    for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+        added = (uint16_t)(added + triangulate_pair(vo, k, fs, zero, NULL));
+    }
+    for (uint32_t i = 0; i < LM_CAP; ++i) {
+        vo->lm[i].seen = 0;
+    }
+    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
+    for (int i = 0; i < 6; ++i) {
+        P0[i] = RP_C(1e-12); /* the pose at frame 0 is the origin by definition */
+        P0[6 + i] = i < 3 ? START_SIGMA_V * START_SIGMA_V : START_SIGMA_W * START_SIGMA_W;
+    }
+    (void)rp_ekf_init(&vo->ekf, &vo->cfg.ekf, x0, P0);
+    vo->frame = 1;
+    vo->prev = *fs;
+    memset(vo->prev_p, 0, sizeof(vo->prev_p));
+    vo->prev_utime = fs->utime;
+    uint32_t flags = RP_EST_INITIALISING;
+    if (added < vo->cfg.min_tracked) {
+        flags |= RP_EST_DEGRADED;
+    }
+    fill_estimate(vo, fs, flags, est);
+    est->frame = 0;
+    return added >= 6 ? RP_OK : RP_E_TOO_FEW;
+}
+
+/* Step (2): the second frame starts the filter with Lowe's method on all correspondences;
+ * the velocity is the displacement over dt. */
+static rp_status_t start_with_lowe(rp_vo_stereo_t *vo, uint32_t n, rp_real dt)
+{
+    rp_lowe_params_t lp = rp_lowe_default_params();
+    rp_real p[6] = {0}, cov[36];
+    for (int i = 0; i < 6; ++i) {
+        p[i] = vo->ekf.x[i];
+    }
+    rp_status_t st = rp_lowe_solve(vo->rig, vo->obs, n, &lp, p, NULL, cov);
+    if (st != RP_OK && st != RP_E_NO_CONVERGE) {
+        return st;
+    }
+    const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
+    rp_real x[RP_EKF_N], P0diag[RP_EKF_N];
+    for (int i = 0; i < 6; ++i) {
+        x[i] = p[i];
+        x[6 + i] = (p[i] - vo->prev_p[i]) / dt;
+        P0diag[i] = cov[i * 6 + i] * s2;
+        P0diag[6 + i] = P0diag[i] / (dt * dt) +
+                        (i < 3 ? START_SIGMA_V * START_SIGMA_V : START_SIGMA_W * START_SIGMA_W);
+    }
+    st = rp_ekf_init(&vo->ekf, &vo->cfg.ekf, x, P0diag);
+    if (st != RP_OK) {
+        return st;
+    }
+    /* Keep Lowe's full pose covariance, not only its diagonal. */
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            vo->ekf.P[i * RP_EKF_N + j] = cov[i * 6 + j] * s2;
+        }
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        vo->used[i] = 1;
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    if (!vo || !est) {
+        return RP_E_ARG;
+    }
+    memset(est, 0, sizeof(*est));
+    if (!fs || !vo->rig) {
+        fill_estimate(vo, NULL, RP_EST_LOST, est);
+        return RP_E_ARG;
+    }
+    if (validate_frameset(vo, fs) != RP_OK) {
+        fill_estimate(vo, NULL, RP_EST_LOST, est);
+        return RP_E_ARG;
+    }
+    if (vo->frame == 0) {
+        return first_frame(vo, fs, est);
+    }
+
+    rp_real dt = vo->cfg.default_dt_s;
+    if (fs->utime > vo->prev_utime) {
+        dt = (rp_real)(fs->utime - vo->prev_utime) * RP_C(1e-6);
+    }
+    uint32_t flags = 0;
+
+    /* Which landmarks are still tracked; lost ones are dropped. */
+    uint32_t n = gather_obs(vo, fs);
+    for (uint32_t i = 0; i < n; ++i) {
+        rp_landmark_t *l = lm_find(vo, vo->obs_id[i]);
+        l->seen = 1;
+    }
+    lm_drop_unseen(vo);
+
+    /* Step (5): a pair under its threshold is re-initialised from the previous frame set at
+     * the previous pose (backtracking one frame), with matches still tracked now. */
+    int reinit = 0;
+    for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+        if (vo->n_lm_pair[k] < vo->cfg.min_tracked) {
+            (void)triangulate_pair(vo, k, &vo->prev, vo->prev_p, fs);
+            reinit = 1;
+        }
+    }
+    if (reinit) {
+        flags |= RP_EST_REINIT;
+        n = gather_obs(vo, fs);
+    }
+    for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+        if (vo->n_lm_pair[k] < vo->cfg.min_tracked) {
+            flags |= RP_EST_DEGRADED;
+        }
+    }
+
+    rp_status_t st;
+    uint16_t n_gated = 0;
+    if (vo->frame == 1) {
+        st = start_with_lowe(vo, n, dt);
+    } else {
+        /* Step (3): predict, then the iterated update over all cameras' features. */
+        st = rp_ekf_predict(&vo->ekf, dt);
+        if (st == RP_OK) {
+            rp_ekf_info_t info;
+            st = rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, &info);
+            n_gated = info.n_gated;
+            if (info.cov_reset) {
+                flags |= RP_EST_COV_RESET;
+            }
+        }
+    }
+
+    for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        est->n_used[cam] = 0;
+    }
+    if (st == RP_OK) {
+        flags |= RP_EST_TRACKING;
+        /* A landmark whose every observation was gated is an outlier track: drop it. */
+        for (uint32_t i = 0; i < n; ++i) {
+            rp_landmark_t *l = lm_find(vo, vo->obs_id[i]);
+            if (vo->used[i]) {
+                est->n_used[vo->obs[i].cam]++;
+                if (l) {
+                    l->seen = 1;
+                }
+            }
+        }
+        if (n_gated > 0) {
+            flags |= RP_EST_GATED;
+            lm_drop_unseen(vo);
+        } else {
+            for (uint32_t i = 0; i < LM_CAP; ++i) {
+                vo->lm[i].seen = 0;
+            }
+        }
+    } else {
+        flags |= RP_EST_LOST;
+    }
+
+    vo->prev = *fs;
+    for (int i = 0; i < 6; ++i) {
+        vo->prev_p[i] = vo->ekf.x[i];
+    }
+    vo->prev_utime = fs->utime;
+    fill_estimate(vo, fs, flags, est);
+    est->n_gated = n_gated;
+    vo->frame++;
+    return st == RP_OK ? RP_OK : (st == RP_E_DIVERGED ? RP_E_DIVERGED : RP_E_TOO_FEW);
+}
