@@ -1,0 +1,390 @@
+/*
+ * rp_sim.c - the paper's simulation protocol (Table 1); see rp_sim.h and DESIGN.md.
+ *
+ * Everything is computed in double and converted to rp_real only where it enters core types
+ * (the rig, the frame set), so the simulator is the same in float and double builds up to that
+ * final rounding. Randomness comes from counter-style keys: a run's points and trajectory from
+ * hash(seed, run), the noise of one feature from hash(seed, run, frame, camera, point id). So a
+ * run does not depend on the order or thread it is computed in, and a feature's noise does not
+ * depend on which other points happen to be visible.
+ */
+#include "rp_sim.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rigpose/rp_camera.h"
+#include "rigpose/rp_rot.h"
+
+_Static_assert(RP_MAX_CAMS >= RP_SIM_NCAMS, "the protocol's rig needs 6 cameras");
+
+#define SIM_PI 3.14159265358979323846
+
+/* Stream domains: keep the point cloud, the trajectory and the noise independent. */
+enum { DOM_POINTS = 1, DOM_TRAJ = 2, DOM_NOISE = 3 };
+
+/* ---- random numbers ------------------------------------------------------------------------ */
+
+/* splitmix64's output function: a bijective 64-bit mixer. */
+static uint64_t mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* Key of (seed, run, domain, index): a hash chain, so that nearby tuples give unrelated keys. */
+static uint64_t sim_key(uint64_t seed, uint32_t run, uint32_t domain, uint64_t index)
+{
+    uint64_t h = mix64(seed + 0x9E3779B97F4A7C15ull);
+    h = mix64(h ^ ((uint64_t)run + 0x632BE59BD9B4E019ull));
+    h = mix64(h ^ (((uint64_t)domain << 56) + 0x8CB92BA72F3D8DD7ull));
+    return mix64(h ^ index);
+}
+
+void rp_rng_seed(rp_rng_t *r, uint64_t seed)
+{
+    uint64_t x = seed;
+    for (int i = 0; i < 4; ++i) {
+        x += 0x9E3779B97F4A7C15ull; /* splitmix64 */
+        r->s[i] = mix64(x);
+    }
+}
+
+static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
+uint64_t rp_rng_next(rp_rng_t *r)
+{
+    uint64_t *s = r->s; /* xoshiro256** */
+    const uint64_t out = rotl(s[1] * 5u, 7) * 9u;
+    const uint64_t t = s[1] << 17;
+    s[2] ^= s[0];
+    s[3] ^= s[1];
+    s[1] ^= s[2];
+    s[0] ^= s[3];
+    s[2] ^= t;
+    s[3] = rotl(s[3], 45);
+    return out;
+}
+
+double rp_rng_uniform(rp_rng_t *r)
+{
+    return (double)(rp_rng_next(r) >> 11) * (1.0 / 9007199254740992.0); /* 53 bits / 2^53 */
+}
+
+double rp_rng_gauss(rp_rng_t *r)
+{
+    /* Box-Muller, cosine branch; u1 in (0, 1] keeps the log finite. */
+    const double u1 = 1.0 - rp_rng_uniform(r);
+    const double u2 = rp_rng_uniform(r);
+    return sqrt(-2.0 * log(u1)) * cos(2.0 * SIM_PI * u2);
+}
+
+/* Two independent N(0, 1) draws: both branches of Box-Muller. */
+static void gauss_pair(rp_rng_t *r, double *g0, double *g1)
+{
+    const double u1 = 1.0 - rp_rng_uniform(r);
+    const double u2 = rp_rng_uniform(r);
+    const double rad = sqrt(-2.0 * log(u1));
+    *g0 = rad * cos(2.0 * SIM_PI * u2);
+    *g1 = rad * sin(2.0 * SIM_PI * u2);
+}
+
+/* Magnitude U[lo, hi] with a random sign. */
+static double signed_mag(rp_rng_t *r, double lo, double hi)
+{
+    const double m = lo + (hi - lo) * rp_rng_uniform(r);
+    return (rp_rng_next(r) >> 63) ? -m : m;
+}
+
+/* ---- small double rotation helpers (row-major 3x3) ----------------------------------------- */
+
+static void mat_mul(const double A[9], const double B[9], double C[9])
+{
+    double T[9];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            T[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+        }
+    }
+    memcpy(C, T, sizeof T);
+}
+
+/* R = Rz(g) Ry(b) Rx(a), the paper's convention (rp_rot.h). */
+static void rot_from_angles(double a, double b, double g, double R[9])
+{
+    const double ca = cos(a), sa = sin(a), cb = cos(b), sb = sin(b), cg = cos(g), sg = sin(g);
+    R[0] = cg * cb;  R[1] = cg * sb * sa - sg * ca;  R[2] = cg * sb * ca + sg * sa;
+    R[3] = sg * cb;  R[4] = sg * sb * sa + cg * ca;  R[5] = sg * sb * ca - cg * sa;
+    R[6] = -sb;      R[7] = cb * sa;                 R[8] = cb * ca;
+}
+
+/* ---- configuration and rig ------------------------------------------------------------------ */
+
+void rp_sim_default_cfg(rp_sim_cfg_t *cfg)
+{
+    memset(cfg, 0, sizeof *cfg);
+    cfg->n_points = 10000;
+    cfg->r_in = 0.667;
+    cfg->r_out = 1.0;
+    cfg->focal_px = 800.0;
+    cfg->width = 640;
+    cfg->height = 480;
+    cfg->noise_px = 0.5;
+    cfg->t_min = 0.005;
+    cfg->t_max = 0.015;
+    cfg->a_min = 0.005;
+    cfg->a_max = 0.02;
+    cfg->min_depth = 0.05;
+    cfg->frame_dt = 1.0 / 30.0;
+    cfg->n_frames = 100;
+}
+
+void rp_sim_make_rig(const rp_sim_cfg_t *cfg, rp_rig_t *rig)
+{
+    /* Camera-to-cam1 rotations (columns: the camera's x, y, z axes in cam1's frame). All
+     * cameras keep y down; cam2 = Ry(+90 deg), cam3 = Ry(180 deg), cam4 = Ry(-90 deg). */
+    static const double R_fwd[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    static const double R_back[9] = {-1, 0, 0, 0, 1, 0, 0, 0, -1};
+    static const double R_right[9] = {0, 0, 1, 0, 1, 0, -1, 0, 0};
+    static const double R_left[9] = {0, 0, -1, 0, 1, 0, 1, 0, 0};
+    /* The protocol's 0.0866 is 0.1 cos(30 deg): exact, so every camera is 0.1 m from cam1. */
+    const double s = 0.05 * sqrt(3.0);
+    const struct { const double *R; double D[3]; } geo[RP_SIM_NCAMS] = {
+        [RP_SIM_CAM1] = {R_fwd, {0.0, 0.0, 0.0}},
+        [RP_SIM_CAM2] = {R_right, {s, 0.0, -0.05}},
+        [RP_SIM_CAM3] = {R_back, {0.0, 0.0, -0.1}},
+        [RP_SIM_CAM4] = {R_left, {-s, 0.0, -0.05}},
+        [RP_SIM_CAM1B] = {R_fwd, {0.1, 0.0, 0.0}},
+        [RP_SIM_CAM3B] = {R_back, {0.1, 0.0, -0.1}},
+    };
+    const double cx = 0.5 * (cfg->width - 1), cy = 0.5 * (cfg->height - 1); /* image centre */
+
+    memset(rig, 0, sizeof *rig);
+    rig->n_cams = RP_SIM_NCAMS;
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        for (int i = 0; i < 9; ++i) {
+            rig->cam[k].R[i] = (rp_real)geo[k].R[i];
+        }
+        for (int i = 0; i < 3; ++i) {
+            rig->cam[k].D[i] = (rp_real)geo[k].D[i];
+        }
+        rig->cam[k].cam = rp_cam_pinhole(cfg->width, cfg->height, (rp_real)cfg->focal_px,
+                                         (rp_real)cfg->focal_px, (rp_real)cx, (rp_real)cy);
+    }
+}
+
+/* ---- a run: points and trajectory ---------------------------------------------------------- */
+
+int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, uint32_t run)
+{
+    memset(sr, 0, sizeof *sr);
+    sr->cfg = *cfg;
+    sr->seed = seed;
+    sr->run = run;
+    rp_sim_make_rig(cfg, &sr->rig);
+
+    const size_t nf = cfg->n_frames ? cfg->n_frames : 1u;
+    sr->points = malloc((size_t)cfg->n_points * 3u * sizeof(double) + 1u);
+    sr->truth = malloc(nf * 6u * sizeof(double));
+    sr->truth_R = malloc(nf * 9u * sizeof(double));
+    if (!sr->points || !sr->truth || !sr->truth_R) {
+        rp_sim_run_free(sr);
+        return -1;
+    }
+
+    /* Points: uniform in the shell's volume (r^3 uniform) and uniform in direction. */
+    rp_rng_t rng;
+    rp_rng_seed(&rng, sim_key(seed, run, DOM_POINTS, 0));
+    const double r3_in = cfg->r_in * cfg->r_in * cfg->r_in;
+    const double r3_out = cfg->r_out * cfg->r_out * cfg->r_out;
+    for (uint32_t i = 0; i < cfg->n_points; ++i) {
+        const double r = cbrt(r3_in + (r3_out - r3_in) * rp_rng_uniform(&rng));
+        const double z = 2.0 * rp_rng_uniform(&rng) - 1.0;
+        const double phi = 2.0 * SIM_PI * rp_rng_uniform(&rng);
+        const double rho = sqrt(fmax(0.0, 1.0 - z * z));
+        sr->points[3u * i] = r * rho * cos(phi);
+        sr->points[3u * i + 1] = r * rho * sin(phi);
+        sr->points[3u * i + 2] = r * z;
+    }
+
+    /* Trajectory: frame 0 is the identity; translation increments along the world axes,
+     * rotation increments composed in the rig's frame, R_j = R_{j-1} Rz(dg) Ry(db) Rx(da). */
+    rp_rng_seed(&rng, sim_key(seed, run, DOM_TRAJ, 0));
+    double d[3] = {0.0, 0.0, 0.0};
+    double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (uint32_t j = 0; j < cfg->n_frames; ++j) {
+        if (j > 0) {
+            double dt[3], da[3];
+            for (int i = 0; i < 3; ++i) {
+                dt[i] = signed_mag(&rng, cfg->t_min, cfg->t_max);
+            }
+            for (int i = 0; i < 3; ++i) {
+                da[i] = signed_mag(&rng, cfg->a_min, cfg->a_max);
+            }
+            double Rinc[9];
+            rot_from_angles(da[0], da[1], da[2], Rinc);
+            mat_mul(R, Rinc, R);
+            for (int i = 0; i < 3; ++i) {
+                d[i] += dt[i];
+            }
+        }
+        double *t = &sr->truth[6u * j];
+        memcpy(&sr->truth_R[9u * j], R, sizeof R);
+        memcpy(t, d, sizeof d);
+        /* The truth angles are what the core's own extraction makes of R_j. */
+        rp_real Rr[9], abg[3];
+        for (int i = 0; i < 9; ++i) {
+            Rr[i] = (rp_real)R[i];
+        }
+        (void)rp_rot_to_angles(Rr, abg);
+        for (int i = 0; i < 3; ++i) {
+            t[3 + i] = (double)abg[i];
+        }
+    }
+    return 0;
+}
+
+void rp_sim_run_free(rp_sim_run_t *sr)
+{
+    free(sr->points);
+    free(sr->truth);
+    free(sr->truth_R);
+    sr->points = sr->truth = sr->truth_R = NULL;
+}
+
+/* ---- a frame: visible, noisy features ------------------------------------------------------ */
+
+typedef struct {
+    double dist2; /* squared distance to the camera, m^2 (ranks "nearest") */
+    uint32_t id;
+    double u, v;  /* noise-free pixel */
+} cand_t;
+
+/* Max-heap on (dist2, id) holding the nearest candidates seen so far. */
+static int cand_farther(const cand_t *a, const cand_t *b)
+{
+    return a->dist2 > b->dist2 || (a->dist2 == b->dist2 && a->id > b->id);
+}
+
+static void heap_sift_down(cand_t *h, uint32_t n, uint32_t i)
+{
+    for (;;) {
+        uint32_t l = 2u * i + 1u, m = i;
+        if (l < n && cand_farther(&h[l], &h[m])) {
+            m = l;
+        }
+        if (l + 1u < n && cand_farther(&h[l + 1u], &h[m])) {
+            m = l + 1u;
+        }
+        if (m == i) {
+            return;
+        }
+        cand_t t = h[i];
+        h[i] = h[m];
+        h[m] = t;
+        i = m;
+    }
+}
+
+static int cand_by_id(const void *a, const void *b)
+{
+    const uint32_t x = ((const cand_t *)a)->id, y = ((const cand_t *)b)->id;
+    return (x > y) - (x < y);
+}
+
+uint32_t rp_sim_frame(const rp_sim_run_t *sr, uint32_t j, rp_frameset_t *fs)
+{
+    const rp_sim_cfg_t *cfg = &sr->cfg;
+    const double *Rj = &sr->truth_R[9u * j];
+    const double *dj = &sr->truth[6u * j];
+    const double w_max = cfg->width - 0.5, h_max = cfg->height - 0.5; /* rp_cam_in_image */
+    const uint64_t frame_key = sim_key(sr->seed, sr->run, DOM_NOISE, j);
+    static const uint32_t cap = RP_MAX_FEATS_PER_CAM;
+    cand_t heap[RP_MAX_FEATS_PER_CAM];
+    uint32_t total = 0;
+
+    fs->utime = (int64_t)llround((double)j * cfg->frame_dt * 1e6);
+    for (int k = 0; k < RP_MAX_CAMS; ++k) {
+        fs->n[k] = 0;
+    }
+
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        const rp_rig_cam_t *rc = &sr->rig.cam[k];
+        const double fx = (double)rc->cam.fx, fy = (double)rc->cam.fy;
+        const double cx = (double)rc->cam.cx, cy = (double)rc->cam.cy;
+        const double u_lo = -1.5 - cx, u_hi = w_max + 1.0 - cx; /* pre-test bounds, pixels */
+        const double v_lo = -1.5 - cy, v_hi = h_max + 1.0 - cy;
+        /* P = R_k^T R_j^T (M - c) with c = d_j + R_j D_k (eq. 2): A = (R_j R_k)^T. */
+        double Rk[9], RjRk[9], c[3];
+        for (int i = 0; i < 9; ++i) {
+            Rk[i] = (double)rc->R[i];
+        }
+        mat_mul(Rj, Rk, RjRk);
+        for (int i = 0; i < 3; ++i) {
+            c[i] = dj[i] + Rj[3 * i] * (double)rc->D[0] + Rj[3 * i + 1] * (double)rc->D[1] +
+                   Rj[3 * i + 2] * (double)rc->D[2];
+        }
+        /* Rows of A are the columns of R_j R_k: the camera's axes in the world. */
+        const double ax[3] = {RjRk[0], RjRk[3], RjRk[6]};
+        const double ay[3] = {RjRk[1], RjRk[4], RjRk[7]};
+        const double az[3] = {RjRk[2], RjRk[5], RjRk[8]};
+
+        uint32_t n = 0;
+        int overflow = 0;
+        for (uint32_t i = 0; i < cfg->n_points; ++i) {
+            const double *M = &sr->points[3u * i];
+            const double q0 = M[0] - c[0], q1 = M[1] - c[1], q2 = M[2] - c[2];
+            const double Z = az[0] * q0 + az[1] * q1 + az[2] * q2;
+            const double X = ax[0] * q0 + ax[1] * q1 + ax[2] * q2;
+            const double Y = ay[0] * q0 + ay[1] * q1 + ay[2] * q2;
+            /* Cheap branch-free pre-test, one pixel wider than the image (no division): most
+             * points fail it, and a well-predicted branch skips them. */
+            const int maybe = (Z >= cfg->min_depth) & (fx * X >= u_lo * Z) &
+                              (fx * X <= u_hi * Z) & (fy * Y >= v_lo * Z) & (fy * Y <= v_hi * Z);
+            if (!maybe) {
+                continue;
+            }
+            /* The rule itself, as rp_cam_in_image states it. */
+            const double u = fx * X / Z + cx;
+            const double v = fy * Y / Z + cy;
+            if (!(u >= -0.5 && u < w_max && v >= -0.5 && v < h_max)) {
+                continue;
+            }
+            const cand_t cd = {X * X + Y * Y + Z * Z, i, u, v};
+            if (n < cap) {
+                heap[n++] = cd; /* in id order, not yet a heap */
+                continue;
+            }
+            if (!overflow) {
+                overflow = 1; /* more visible than the limit: keep the nearest cap */
+                for (uint32_t m = cap / 2u; m-- > 0;) {
+                    heap_sift_down(heap, n, m);
+                }
+            }
+            if (cand_farther(&heap[0], &cd)) {
+                heap[0] = cd;
+                heap_sift_down(heap, n, 0);
+            }
+        }
+        if (overflow) {
+            qsort(heap, n, sizeof heap[0], cand_by_id);
+        }
+
+        for (uint32_t m = 0; m < n; ++m) {
+            rp_rng_t rng;
+            rp_rng_seed(&rng, frame_key ^ mix64(((uint64_t)k << 32) | heap[m].id));
+            double nu, nv;
+            gauss_pair(&rng, &nu, &nv);
+            nu *= cfg->noise_px;
+            nv *= cfg->noise_px;
+            fs->f[k][m].id = heap[m].id;
+            fs->f[k][m].uv[0] = (rp_real)(heap[m].u + nu);
+            fs->f[k][m].uv[1] = (rp_real)(heap[m].v + nv);
+        }
+        fs->n[k] = (uint16_t)n;
+        total += n;
+    }
+    return total;
+}
