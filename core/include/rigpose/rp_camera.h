@@ -38,7 +38,8 @@ rp_status_t rp_cam_distort(const rp_camera_t *cam, const rp_real xn[2], rp_real 
                            rp_real J[4]);
 
 /* Invert rp_cam_distort by Gauss-Newton (up to 20 iterations, to 1e-12 in double, 1e-6 in
- * float, in normalised units). RP_E_NO_CONVERGE if it does not get there, RP_E_NAN. */
+ * float, in normalised units). RP_E_NO_CONVERGE if it does not get there or lands where the
+ * model folds over (d xd / d xn not positive definite: no valid ray), RP_E_NAN. */
 rp_status_t rp_cam_undistort(const rp_camera_t *cam, const rp_real xd[2], rp_real xn[2]);
 
 /* Project camera-frame point P (m) to pixels uv. J (2x3 row-major, d uv / d P) may be NULL.

@@ -34,6 +34,8 @@ typedef struct {
     rp_real p[6];     /* [tx ty tz alpha beta gamma], m and rad */
     rp_real R[9];     /* R_j */
     rp_real dR[3][9]; /* dR_j / d alpha, d beta, d gamma */
+    rp_real ax[3][3]; /* world-frame axes w_i with dR_j/d(angle i) = [w_i]x R_j: R_j e_x,
+                         Rz(gamma) e_y, e_z (rp_rig_project's Jacobian uses these) */
 } rp_pose_lin_t;
 
 /* RP_OK if the rig is usable: 1..RP_MAX_CAMS cameras, each rp_cam_check OK, each R_k a

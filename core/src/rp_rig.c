@@ -1,0 +1,200 @@
+/*
+ * rp_rig.c - the rig and the measurement model of eqs. (1)-(2) with its analytic Jacobians.
+ *
+ * With m = M - d_j (world frame), eq. (2) reads P = R_k^T (R_j^T m - D_k): R_j^T m is M in
+ * cam1's (the rig's) frame. Differentiating, with J_c = d uv / d P (2x3, row r is j_r) and
+ * h_r = R_j R_k j_r (the world-frame gradient of uv_r with respect to M):
+ *   d uv_r / d M     =  h_r^T
+ *   d uv_r / d d_j   = -h_r^T
+ *   d uv_r / d ang_i =  j_r . R_k^T (dR_j/d ang_i)^T m  =  w_i . (h_r x m),
+ * because dR_j/d ang_i = [w_i]x R_j (rp_pose_lin_t.ax) and [w]x^T m = m x w.
+ */
+#include "rigpose/rp_rig.h"
+
+#include <stddef.h>
+
+#include "priv/rp_math.h"
+#include "rigpose/rp_rot.h"
+
+#define ROT_TOL RP_C(1e-6) /* orthonormality of R_k accepted by rp_rig_check */
+
+/* Local copies of rp_rot_apply / rp_rot_apply_t (no aliasing) so that the per-feature path
+ * inlines them. */
+static inline void mv(const rp_real R[9], const rp_real v[3], rp_real out[3])
+{
+    out[0] = R[0] * v[0] + R[1] * v[1] + R[2] * v[2];
+    out[1] = R[3] * v[0] + R[4] * v[1] + R[5] * v[2];
+    out[2] = R[6] * v[0] + R[7] * v[1] + R[8] * v[2];
+}
+
+static inline void mtv(const rp_real R[9], const rp_real v[3], rp_real out[3])
+{
+    out[0] = R[0] * v[0] + R[3] * v[1] + R[6] * v[2];
+    out[1] = R[1] * v[0] + R[4] * v[1] + R[7] * v[2];
+    out[2] = R[2] * v[0] + R[5] * v[1] + R[8] * v[2];
+}
+
+static int rot_ok(const rp_real R[9])
+{
+    for (int i = 0; i < 3; ++i) {
+        for (int j = i; j < 3; ++j) {
+            const rp_real d = R[3 * i] * R[3 * j] + R[3 * i + 1] * R[3 * j + 1] +
+                              R[3 * i + 2] * R[3 * j + 2];
+            const rp_real want = (i == j) ? RP_C(1.0) : RP_C(0.0);
+            if (!(rp_fabs(d - want) <= ROT_TOL)) {
+                return 0;
+            }
+        }
+    }
+    const rp_real det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) +
+                        R[2] * (R[3] * R[7] - R[4] * R[6]);
+    return det > RP_C(0.0);
+}
+
+rp_status_t rp_rig_check(const rp_rig_t *rig)
+{
+    if (rig == NULL || rig->n_cams < 1 || rig->n_cams > RP_MAX_CAMS) {
+        return RP_E_ARG;
+    }
+    for (unsigned k = 0; k < rig->n_cams; ++k) {
+        const rp_rig_cam_t *c = &rig->cam[k];
+        const rp_status_t st = rp_cam_check(&c->cam);
+        if (st != RP_OK) {
+            return st;
+        }
+        if (!rp_all_finite(c->R, 9) || !rp_all_finite(c->D, 3)) {
+            return RP_E_NAN;
+        }
+        if (!rot_ok(c->R)) {
+            return RP_E_ARG;
+        }
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_pose_lin_set(rp_pose_lin_t *pl, const rp_real p[6])
+{
+    if (pl == NULL || p == NULL) {
+        return RP_E_ARG;
+    }
+    if (!rp_all_finite(p, 6)) {
+        return RP_E_NAN;
+    }
+    for (int i = 0; i < 6; ++i) {
+        pl->p[i] = p[i];
+    }
+    rp_rot_from_angles(p + 3, pl->R);
+    rp_rot_angle_derivs(p + 3, pl->dR);
+    const rp_real cg = rp_cos(p[5]), sg = rp_sin(p[5]);
+    pl->ax[0][0] = pl->R[0];
+    pl->ax[0][1] = pl->R[3];
+    pl->ax[0][2] = pl->R[6];
+    pl->ax[1][0] = -sg;
+    pl->ax[1][1] = cg;
+    pl->ax[1][2] = RP_C(0.0);
+    pl->ax[2][0] = RP_C(0.0);
+    pl->ax[2][1] = RP_C(0.0);
+    pl->ax[2][2] = RP_C(1.0);
+    return RP_OK;
+}
+
+/* P = R_k^T (R_j^T m - D_k), m = M - d_j (eq. 2); also returns m. */
+static inline void cam_point(const rp_rig_cam_t *c, const rp_pose_lin_t *pl, const rp_real M[3],
+                      rp_real m[3], rp_real P[3])
+{
+    rp_real y[3];
+    m[0] = M[0] - pl->p[0];
+    m[1] = M[1] - pl->p[1];
+    m[2] = M[2] - pl->p[2];
+    mtv(pl->R, m, y);
+    y[0] -= c->D[0];
+    y[1] -= c->D[1];
+    y[2] -= c->D[2];
+    mtv(c->R, y, P);
+}
+
+rp_status_t rp_rig_cam_point(const rp_rig_t *rig, uint8_t k, const rp_pose_lin_t *pl,
+                             const rp_real M[3], rp_real P[3])
+{
+    if (rig == NULL || pl == NULL || M == NULL || P == NULL || k >= rig->n_cams ||
+        k >= RP_MAX_CAMS) {
+        return RP_E_ARG;
+    }
+    if (!rp_all_finite(M, 3)) {
+        return RP_E_NAN;
+    }
+    rp_real m[3];
+    cam_point(&rig->cam[k], pl, M, m, P);
+    return RP_OK;
+}
+
+rp_status_t rp_rig_world_point(const rp_rig_t *rig, uint8_t k, const rp_pose_lin_t *pl,
+                               const rp_real P[3], rp_real M[3])
+{
+    if (rig == NULL || pl == NULL || M == NULL || P == NULL || k >= rig->n_cams ||
+        k >= RP_MAX_CAMS) {
+        return RP_E_ARG;
+    }
+    if (!rp_all_finite(P, 3)) {
+        return RP_E_NAN;
+    }
+    const rp_rig_cam_t *c = &rig->cam[k];
+    rp_real y[3];
+    mv(c->R, P, y);
+    y[0] += c->D[0];
+    y[1] += c->D[1];
+    y[2] += c->D[2];
+    mv(pl->R, y, M);
+    M[0] += pl->p[0];
+    M[1] += pl->p[1];
+    M[2] += pl->p[2];
+    return RP_OK;
+}
+
+rp_status_t rp_rig_project(const rp_rig_t *rig, uint8_t k, const rp_pose_lin_t *pl,
+                           const rp_real M[3], rp_real uv[2], rp_real J_pose[12],
+                           rp_real J_M[6])
+{
+    if (rig == NULL || pl == NULL || M == NULL || uv == NULL || k >= rig->n_cams ||
+        k >= RP_MAX_CAMS) {
+        return RP_E_ARG;
+    }
+    if (!rp_all_finite(M, 3)) {
+        return RP_E_NAN;
+    }
+    const rp_rig_cam_t *c = &rig->cam[k];
+    rp_real m[3], P[3];
+    cam_point(c, pl, M, m, P);
+    if (J_pose == NULL && J_M == NULL) {
+        return rp_cam_project(&c->cam, P, uv, NULL);
+    }
+    rp_real Jc[6];
+    const rp_status_t st = rp_cam_project(&c->cam, P, uv, Jc);
+    if (st != RP_OK) {
+        return st;
+    }
+    for (int r = 0; r < 2; ++r) {
+        rp_real g[3], h[3];
+        mv(c->R, Jc + 3 * r, g);
+        mv(pl->R, g, h);
+        if (J_M != NULL) {
+            J_M[3 * r] = h[0];
+            J_M[3 * r + 1] = h[1];
+            J_M[3 * r + 2] = h[2];
+        }
+        if (J_pose != NULL) {
+            const rp_real hm0 = h[1] * m[2] - h[2] * m[1];
+            const rp_real hm1 = h[2] * m[0] - h[0] * m[2];
+            const rp_real hm2 = h[0] * m[1] - h[1] * m[0];
+            rp_real *row = J_pose + 6 * r;
+            row[0] = -h[0];
+            row[1] = -h[1];
+            row[2] = -h[2];
+            for (int i = 0; i < 3; ++i) {
+                const rp_real *w = pl->ax[i];
+                row[3 + i] = w[0] * hm0 + w[1] * hm1 + w[2] * hm2;
+            }
+        }
+    }
+    return RP_OK;
+}
