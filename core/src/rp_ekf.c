@@ -63,11 +63,16 @@ rp_status_t rp_ekf_init(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real
             return RP_E_ARG;
         }
     }
+    /* The inputs may point into *ekf itself (re-initialising in place): copy them first. */
+    const rp_ekf_params_t prm_copy = *prm;
+    rp_real x_copy[N], d_copy[N];
+    memcpy(x_copy, x0, sizeof(x_copy));
+    memcpy(d_copy, P0diag, sizeof(d_copy));
     memset(ekf, 0, sizeof(*ekf));
-    ekf->prm = *prm;
-    memcpy(ekf->x, x0, sizeof(ekf->x));
+    ekf->prm = prm_copy;
+    memcpy(ekf->x, x_copy, sizeof(ekf->x));
     for (int i = 0; i < N; ++i) {
-        ekf->P[i * N + i] = P0diag[i];
+        ekf->P[i * N + i] = d_copy[i];
     }
     return RP_OK;
 }
@@ -250,8 +255,10 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
         for (int i = 0; i < NP; ++i) {
             dp[i] = p[i] - x0[i];
         }
-        /* The first pass gates with the prior; if that rejects most features the prior is
-         * poor (e.g. after a jump), so it keeps them all and lets later passes gate. */
+        /* Gate against the current estimate and covariance. If that rejects more features
+         * than it keeps, the estimate is still poor (a bad prior, or an iteration not yet
+         * converged: residuals are linearisation error, not noise), so this iteration keeps
+         * them all and a later one gates. */
         int gate = prm->gate_chi2 > RP_C(0.0);
         for (int pass = 0; pass < 2; ++pass) {
             memset(A, 0, sizeof(A));
@@ -304,7 +311,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
                     }
                 }
             }
-            if (gate && it == 0 && pass == 0 && n_gated > n_used) {
+            if (gate && pass == 0 && n_gated > n_used) {
                 gate = 0;
                 continue;
             }

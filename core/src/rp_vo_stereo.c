@@ -26,6 +26,7 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.max_depth_m = RP_C(100.0);
     c.max_reproj_px = RP_C(1.5);
     c.default_dt_s = RP_C(1.0) / RP_C(30.0);
+    c.refine_structure = 1;
     return c;
 }
 
@@ -53,7 +54,7 @@ static rp_landmark_t *lm_find(rp_vo_stereo_t *vo, uint32_t id)
     return NULL;
 }
 
-static rp_status_t lm_insert(rp_vo_stereo_t *vo, uint32_t id, uint8_t pair, const rp_real M[3])
+static rp_status_t lm_insert(rp_vo_stereo_t *vo, uint32_t id, uint8_t pair, const rp_point3_t *pt)
 {
     if (vo->n_lm >= LM_MAX_FILL) {
         return RP_E_FULL;
@@ -69,7 +70,7 @@ static rp_status_t lm_insert(rp_vo_stereo_t *vo, uint32_t id, uint8_t pair, cons
     l->id = id;
     l->pair = pair;
     l->seen = 0;
-    memcpy(l->M, M, sizeof(l->M));
+    l->pt = *pt;
     vo->n_lm++;
     vo->n_lm_pair[pair]++;
     return RP_OK;
@@ -252,10 +253,13 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
             reproj > cfg->max_reproj_px || Pa[2] < cfg->min_depth_m || Pa[2] > cfg->max_depth_m) {
             continue;
         }
-        if (rp_rig_world_point(vo->rig, sp->a, &pl, Pa, M) != RP_OK) {
+        const uint8_t cams[2] = {sp->a, sp->b};
+        rp_point3_t pt;
+        if (rp_rig_world_point(vo->rig, sp->a, &pl, Pa, M) != RP_OK ||
+            rp_struct_init(&pt, vo->rig, cams, 2, &pl, M, cfg->ekf.sigma_px) != RP_OK) {
             continue;
         }
-        if (lm_insert(vo, fa->id, k, M) != RP_OK) {
+        if (lm_insert(vo, fa->id, k, &pt) != RP_OK) {
             break; /* table full: keep what we have */
         }
         added++;
@@ -295,7 +299,7 @@ static uint32_t gather_obs(rp_vo_stereo_t *vo, const rp_frameset_t *fs)
             rp_obs_t *o = &vo->obs[n];
             o->uv[0] = ft->uv[0];
             o->uv[1] = ft->uv[1];
-            memcpy(o->M, l->M, sizeof(o->M));
+            memcpy(o->M, l->pt.M, sizeof(o->M));
             o->w = RP_C(1.0);
             o->cam = cam;
             vo->obs_id[n] = ft->id;
@@ -405,6 +409,26 @@ static rp_status_t start_with_lowe(rp_vo_stereo_t *vo, uint32_t n, rp_real dt)
     return RP_OK;
 }
 
+/* Step 4: each used observation updates its landmark's structure EKF at the new pose. */
+static void refine_structure(rp_vo_stereo_t *vo, uint32_t n)
+{
+    rp_pose_lin_t pl;
+    if (rp_pose_lin_set(&pl, vo->ekf.x) != RP_OK) {
+        return;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!vo->used[i]) {
+            continue;
+        }
+        rp_landmark_t *l = lm_find(vo, vo->obs_id[i]);
+        if (l) {
+            /* a rejected update leaves the point as it was */
+            (void)rp_struct_update(&l->pt, vo->rig, vo->obs[i].cam, &pl, vo->obs[i].uv,
+                                   vo->cfg.ekf.sigma_px, vo->cfg.ekf.gate_chi2);
+        }
+    }
+}
+
 rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
 {
     if (!vo || !est) {
@@ -487,6 +511,9 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
                     l->seen = 1;
                 }
             }
+        }
+        if (vo->cfg.refine_structure) {
+            refine_structure(vo, n);
         }
         if (n_gated > 0) {
             flags |= RP_EST_GATED;

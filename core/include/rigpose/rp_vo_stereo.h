@@ -11,6 +11,8 @@
  *  2. At the second frame the pose EKF is started from Lowe's method on all correspondences.
  *  3. Every later frame: EKF prediction, then the iterated update with the pixels of every
  *     tracked landmark in every camera of the layout (eqs. 1-2).
+ *  4. (beyond the paper) Each landmark's structure EKF takes the frame's observations at the
+ *     updated pose, so the structure improves instead of staying at its first triangulation.
  *  A landmark missing from a frame (its track lost in both cameras) is dropped for good.
  */
 #ifndef RP_VO_STEREO_H
@@ -22,6 +24,7 @@
 #include "rp_obs.h"
 #include "rp_rig.h"
 #include "rp_stereo.h"
+#include "rp_struct.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -38,16 +41,20 @@ typedef struct {
     rp_real max_depth_m;
     rp_real max_reproj_px;          /* reject a triangulation with a larger reprojection error */
     rp_real default_dt_s;           /* frame interval used when timestamps are missing, s */
+    uint8_t refine_structure;       /* 1: a structure EKF per landmark refines its position with
+                                     * every later observation (beyond the paper, which keeps the
+                                     * first triangulation); 0: the paper's fixed structure */
 } rp_vo_stereo_cfg_t;
 
-/* Defaults: the paper's threshold of 50, 1.5 px epipolar band, 0.05..100 m, 1.5 px, 1/30 s. */
+/* Defaults: the paper's threshold of 50, 1.5 px epipolar band, 0.05..100 m, 1.5 px, 1/30 s,
+ * structure refinement on. */
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
 
 typedef struct {
     uint32_t id;    /* feature id; RP_VO_EMPTY_ID marks a free slot */
     uint8_t pair;   /* pair that triangulated it */
     uint8_t seen;   /* scratch: observed (and not gated) in the current frame */
-    rp_real M[3];   /* world position, m */
+    rp_point3_t pt; /* world position (m) and its covariance */
 } rp_landmark_t;
 
 #define RP_VO_EMPTY_ID 0xFFFFFFFFu
