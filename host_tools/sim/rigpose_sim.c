@@ -1,0 +1,611 @@
+/*
+ * rigpose-sim - the paper's simulation protocol (Table 1) run through rigpose's estimators.
+ *
+ * Each run is one random scene and trajectory (rp_sim.h); its frames are generated once and fed
+ * to every selected method, so all methods see the same noisy measurements. For every frame
+ * j >= 1 (frame 0 defines the world) the absolute error of each pose column is taken:
+ * |t_est - t_true| for tx ty tz, |wrap(angle_est - angle_true)| for alpha beta gamma; the table
+ * shows the means over all frames of all runs beside the paper's Table 1 row, plus the median
+ * and worst per-run means (the tails matter). Runs are spread over threads; the results do not
+ * depend on the thread count (only the timings do).
+ *
+ * usage: rigpose-sim [--methods LIST] [--runs N] [--frames N] [--seed S] [--focal-px F]
+ *                    [--noise-px S] [--threads N] [--json] [--help]
+ */
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "rigpose/rp_vo_stereo.h"
+#include "rp_sim.h"
+
+#define SIM_PI 3.14159265358979323846
+#define MAX_METHODS 16
+#define MAX_THREADS 256
+#define NCOL 6
+
+static const char *const col_name[NCOL] = {"tx", "ty", "tz", "alpha", "beta", "gamma"};
+
+/* ---- the paper's Table 1 (DESIGN.md) ------------------------------------------------------- */
+
+typedef struct {
+    const char *name;
+    double v[NCOL]; /* mean absolute error per frame: m (tx ty tz), rad (alpha beta gamma) */
+} paper_row_t;
+
+static const paper_row_t paper_rows[] = {
+    {"4 cameras", {.0005, .0005, .0021, .0005, .0004, .0015}},
+    {"2 cameras", {.0055, .0132, .0042, .0137, .0055, .0026}},
+    {"cam 1", {.0252, .0206, .0337, .0204, .0260, .0040}},
+    {"cam 2", {.2973, .3731, .3828, .0864, .2724, .2791}},
+    {"cam 3", {.0238, .0211, .0390, .0203, .0249, .0045}},
+    {"cam 4", {.2846, .3740, .3770, .0879, .2750, .2825}},
+    {"RC", {.0211, .0694, .0746, .0288, .0624, .0553}},
+};
+
+static const paper_row_t *paper_row(const char *name)
+{
+    for (size_t i = 0; i < sizeof paper_rows / sizeof paper_rows[0]; ++i) {
+        if (strcmp(paper_rows[i].name, name) == 0) {
+            return &paper_rows[i];
+        }
+    }
+    return NULL;
+}
+
+/* ---- methods ------------------------------------------------------------------------------- */
+
+typedef struct {
+    double noise_px; /* simulated pixel noise, px (the filters' measurement sigma) */
+} method_opts_t;
+
+/* One estimator as the simulator drives it. `state_size` bytes are allocated once per thread
+ * (zeroed); `init` starts a run on that memory (the rig outlives the run); `step` processes one
+ * frame set and always fills est. Adding a method = writing its two adapters and one entry. */
+typedef struct {
+    const char *name;      /* --methods token */
+    const char *paper;     /* Table 1 row it is compared with */
+    size_t state_size;
+    rp_status_t (*init)(void *state, const rp_rig_t *rig, const method_opts_t *o);
+    rp_status_t (*step)(void *state, const rp_frameset_t *fs, rp_estimate_t *est);
+} method_t;
+
+static rp_status_t stereo_init(void *state, const rp_rig_t *rig, const method_opts_t *o,
+                               int both_pairs)
+{
+    rp_vo_stereo_cfg_t cfg = rp_vo_stereo_default_cfg();
+    cfg.n_pairs = both_pairs ? 2 : 1;
+    cfg.pair_a[0] = RP_SIM_CAM1;
+    cfg.pair_b[0] = RP_SIM_CAM1B;
+    if (both_pairs) {
+        cfg.pair_a[1] = RP_SIM_CAM3;
+        cfg.pair_b[1] = RP_SIM_CAM3B;
+    }
+    /* The filter needs sigma > 0: a noise-free simulation still gets a small one. */
+    cfg.ekf.sigma_px = (rp_real)(o->noise_px > 0.01 ? o->noise_px : 0.01);
+    return rp_vo_stereo_init((rp_vo_stereo_t *)state, rig, &cfg);
+}
+
+static rp_status_t stereo4_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
+{
+    return stereo_init(state, rig, o, 1);
+}
+
+static rp_status_t stereo2_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
+{
+    return stereo_init(state, rig, o, 0);
+}
+
+static rp_status_t stereo_step(void *state, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    return rp_vo_stereo_step((rp_vo_stereo_t *)state, fs, est);
+}
+
+static const method_t methods[] = {
+    {"stereo4", "4 cameras", sizeof(rp_vo_stereo_t), stereo4_init, stereo_step},
+    {"stereo2", "2 cameras", sizeof(rp_vo_stereo_t), stereo2_init, stereo_step},
+    /* cam1..cam4 -> "cam 1".."cam 4", rc -> "RC", gc -> "2 cameras" (no paper row) */
+};
+#define N_KNOWN_METHODS (sizeof methods / sizeof methods[0])
+
+/* ---- options ------------------------------------------------------------------------------- */
+
+typedef struct {
+    const method_t *m[MAX_METHODS];
+    unsigned n_methods;
+    uint32_t runs, frames;
+    uint64_t seed;
+    double focal_px, noise_px;
+    unsigned threads;
+    int json;
+} opts_t;
+
+static void usage(FILE *out, const char *argv0)
+{
+    fprintf(out,
+            "usage: %s [options]\n"
+            "Runs the paper's simulation protocol (Table 1) and compares with the paper.\n"
+            "  --methods LIST   comma-separated methods (default stereo4,stereo2); known:",
+            argv0);
+    for (size_t i = 0; i < N_KNOWN_METHODS; ++i) {
+        fprintf(out, " %s", methods[i].name);
+    }
+    fprintf(out,
+            "\n"
+            "  --runs N         runs (default 1500)\n"
+            "  --frames N       frames per run, >= 2 (default 100; frame 0 is not scored)\n"
+            "  --seed S         experiment seed (default 1)\n"
+            "  --focal-px F     fx = fy in pixels, principal point at the image centre "
+            "(default 800)\n"
+            "  --noise-px S     Gaussian pixel noise sigma (default 0.5)\n"
+            "  --threads N      worker threads (default: online CPUs)\n"
+            "  --json           print one JSON object instead of the table\n"
+            "  --help           this text\n");
+}
+
+static int parse_u64(const char *s, uint64_t *out)
+{
+    char *end;
+    if (!s || !*s || *s == '-') {
+        return -1;
+    }
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, 0);
+    if (errno || *end) {
+        return -1;
+    }
+    *out = (uint64_t)v;
+    return 0;
+}
+
+static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
+{
+    uint64_t v;
+    if (parse_u64(s, &v) || v < lo || v > hi) {
+        return -1;
+    }
+    *out = (uint32_t)v;
+    return 0;
+}
+
+static int parse_double(const char *s, double lo, double hi, double *out)
+{
+    char *end;
+    if (!s || !*s) {
+        return -1;
+    }
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno || *end || !(v >= lo && v <= hi)) {
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+static int parse_methods(const char *list, opts_t *o)
+{
+    o->n_methods = 0;
+    const char *p = list;
+    if (!p || !*p) {
+        return -1;
+    }
+    for (;;) {
+        const char *comma = strchr(p, ',');
+        const size_t len = comma ? (size_t)(comma - p) : strlen(p);
+        const method_t *found = NULL;
+        for (size_t i = 0; i < N_KNOWN_METHODS; ++i) {
+            if (strlen(methods[i].name) == len && strncmp(methods[i].name, p, len) == 0) {
+                found = &methods[i];
+            }
+        }
+        if (!found) {
+            fprintf(stderr, "rigpose-sim: unknown method '%.*s'\n", (int)len, p);
+            return -1;
+        }
+        for (unsigned i = 0; i < o->n_methods; ++i) {
+            if (o->m[i] == found) {
+                fprintf(stderr, "rigpose-sim: method '%s' given twice\n", found->name);
+                return -1;
+            }
+        }
+        if (o->n_methods == MAX_METHODS) {
+            return -1;
+        }
+        o->m[o->n_methods++] = found;
+        if (!comma) {
+            return 0;
+        }
+        p = comma + 1;
+    }
+}
+
+/* 0 on success, 1 if --help was asked, -1 on a bad option (message printed). */
+static int parse_args(int argc, char **argv, opts_t *o)
+{
+    memset(o, 0, sizeof *o);
+    o->runs = 1500;
+    o->frames = 100;
+    o->seed = 1;
+    o->focal_px = 800.0;
+    o->noise_px = 0.5;
+    const long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    o->threads = ncpu < 1 ? 1u : ncpu > MAX_THREADS ? MAX_THREADS : (unsigned)ncpu;
+    if (parse_methods("stereo4,stereo2", o)) {
+        return -1;
+    }
+
+    for (int i = 1; i < argc; ++i) {
+        const char *arg = argv[i];
+        if (strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0) {
+            return 1;
+        }
+        if (strcmp(arg, "--json") == 0) {
+            o->json = 1;
+            continue;
+        }
+        /* --name value or --name=value */
+        char name[32];
+        const char *val;
+        const char *eq = strchr(arg, '=');
+        if (strncmp(arg, "--", 2) != 0) {
+            fprintf(stderr, "rigpose-sim: unexpected argument '%s'\n", arg);
+            return -1;
+        }
+        if (eq) {
+            const size_t len = (size_t)(eq - arg);
+            if (len >= sizeof name) {
+                fprintf(stderr, "rigpose-sim: unknown option '%s'\n", arg);
+                return -1;
+            }
+            memcpy(name, arg, len);
+            name[len] = '\0';
+            val = eq + 1;
+        } else {
+            if (strlen(arg) >= sizeof name) {
+                fprintf(stderr, "rigpose-sim: unknown option '%s'\n", arg);
+                return -1;
+            }
+            strcpy(name, arg);
+            val = (i + 1 < argc) ? argv[++i] : NULL;
+        }
+        int bad;
+        uint32_t threads = 0;
+        if (strcmp(name, "--methods") == 0) {
+            bad = parse_methods(val, o);
+        } else if (strcmp(name, "--runs") == 0) {
+            bad = parse_u32(val, 1, 100000000u, &o->runs);
+        } else if (strcmp(name, "--frames") == 0) {
+            bad = parse_u32(val, 2, 1000000u, &o->frames);
+        } else if (strcmp(name, "--seed") == 0) {
+            bad = parse_u64(val, &o->seed);
+        } else if (strcmp(name, "--focal-px") == 0) {
+            bad = parse_double(val, 1.0, 1e6, &o->focal_px);
+        } else if (strcmp(name, "--noise-px") == 0) {
+            bad = parse_double(val, 0.0, 100.0, &o->noise_px);
+        } else if (strcmp(name, "--threads") == 0) {
+            bad = parse_u32(val, 1, MAX_THREADS, &threads);
+            o->threads = threads;
+        } else {
+            fprintf(stderr, "rigpose-sim: unknown option '%s'\n", name);
+            return -1;
+        }
+        if (bad) {
+            fprintf(stderr, "rigpose-sim: bad value for %s: '%s'\n", name, val ? val : "");
+            return -1;
+        }
+    }
+    return 0;
+}
+
+/* ---- the experiment ------------------------------------------------------------------------ */
+
+/* What one method made of one run. */
+typedef struct {
+    double err_sum[NCOL]; /* sum over frames 1..frames-1 of the absolute errors, m / rad */
+    uint32_t lost;        /* scored frames whose step did not return RP_OK */
+    uint64_t step_ns;     /* time spent in step(), all frames */
+} run_result_t;
+
+typedef struct {
+    const opts_t *o;
+    rp_sim_cfg_t cfg;
+    run_result_t *res; /* [method][run] */
+    pthread_mutex_t lock;
+    uint32_t next_run; /* under lock */
+    int failed;        /* under lock: a run could not be set up */
+    char why[160];
+} job_t;
+
+static double wrap_angle(double x)
+{
+    x = fmod(x + SIM_PI, 2.0 * SIM_PI);
+    if (x < 0.0) {
+        x += 2.0 * SIM_PI;
+    }
+    return x - SIM_PI;
+}
+
+static uint64_t now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+static void job_fail(job_t *job, const char *fmt, const char *a, const char *b)
+{
+    pthread_mutex_lock(&job->lock);
+    if (!job->failed) {
+        job->failed = 1;
+        snprintf(job->why, sizeof job->why, fmt, a, b);
+    }
+    pthread_mutex_unlock(&job->lock);
+}
+
+static void *worker(void *arg)
+{
+    job_t *job = arg;
+    const opts_t *o = job->o;
+    const method_opts_t mo = {o->noise_px};
+    void *state[MAX_METHODS] = {NULL};
+    rp_frameset_t *fs = malloc(sizeof *fs);
+    rp_rig_t rig;
+    rp_sim_make_rig(&job->cfg, &rig);
+    int ok = fs != NULL;
+    for (unsigned m = 0; ok && m < o->n_methods; ++m) {
+        state[m] = calloc(1, o->m[m]->state_size); /* big: never on the stack */
+        ok = state[m] != NULL;
+    }
+    if (!ok) {
+        job_fail(job, "out of memory%s%s", "", "");
+    }
+
+    while (ok) {
+        pthread_mutex_lock(&job->lock);
+        const uint32_t r = job->next_run++;
+        const int stop = job->failed || r >= o->runs;
+        pthread_mutex_unlock(&job->lock);
+        if (stop) {
+            break;
+        }
+        rp_sim_run_t sr;
+        if (rp_sim_run_init(&sr, &job->cfg, o->seed, r) != 0) {
+            job_fail(job, "out of memory%s%s", "", "");
+            break;
+        }
+        for (unsigned m = 0; ok && m < o->n_methods; ++m) {
+            const rp_status_t st = o->m[m]->init(state[m], &rig, &mo);
+            if (st != RP_OK) {
+                job_fail(job, "%s: init failed: %s", o->m[m]->name, rp_status_str(st));
+                ok = 0;
+            }
+        }
+        for (uint32_t j = 0; ok && j < o->frames; ++j) {
+            (void)rp_sim_frame(&sr, j, fs); /* once, for every method */
+            const double *truth = &sr.truth[6u * j];
+            for (unsigned m = 0; m < o->n_methods; ++m) {
+                run_result_t *res = &job->res[(size_t)m * o->runs + r];
+                rp_estimate_t est;
+                const uint64_t t0 = now_ns();
+                const rp_status_t st = o->m[m]->step(state[m], fs, &est);
+                res->step_ns += now_ns() - t0;
+                if (j == 0) {
+                    continue; /* frame 0 defines the world */
+                }
+                res->lost += st != RP_OK;
+                for (int c = 0; c < 3; ++c) {
+                    res->err_sum[c] += fabs((double)est.p[c] - truth[c]);
+                }
+                for (int c = 3; c < NCOL; ++c) {
+                    res->err_sum[c] += fabs(wrap_angle((double)est.p[c] - truth[c]));
+                }
+            }
+        }
+        rp_sim_run_free(&sr);
+    }
+
+    for (unsigned m = 0; m < o->n_methods; ++m) {
+        free(state[m]);
+    }
+    free(fs);
+    return NULL;
+}
+
+/* ---- summary and output -------------------------------------------------------------------- */
+
+typedef struct {
+    double mean[NCOL];       /* over all scored frames of all runs */
+    double median_run[NCOL]; /* median over runs of the per-run mean */
+    double worst_run[NCOL];  /* largest per-run mean */
+    uint32_t worst_run_tx;   /* index of the run with the largest tx mean */
+    uint64_t lost;
+    double us_per_frame;     /* mean time of one step() call, microseconds */
+} summary_t;
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static void summarise(const opts_t *o, const run_result_t *res, double *scratch, summary_t *s)
+{
+    const double per_run = (double)(o->frames - 1);
+    uint64_t ns = 0;
+    memset(s, 0, sizeof *s);
+    for (uint32_t r = 0; r < o->runs; ++r) {
+        ns += res[r].step_ns;
+        s->lost += res[r].lost;
+    }
+    double worst_tx = -1.0;
+    for (uint32_t r = 0; r < o->runs; ++r) {
+        const double v = res[r].err_sum[0] / per_run;
+        if (v > worst_tx || isnan(v)) {
+            worst_tx = v;
+            s->worst_run_tx = r;
+            if (isnan(v)) {
+                break;
+            }
+        }
+    }
+    for (int c = 0; c < NCOL; ++c) {
+        double sum = 0.0;
+        for (uint32_t r = 0; r < o->runs; ++r) {
+            scratch[r] = res[r].err_sum[c] / per_run;
+            sum += res[r].err_sum[c];
+        }
+        s->mean[c] = sum / (per_run * o->runs);
+        qsort(scratch, o->runs, sizeof *scratch, cmp_double);
+        const uint32_t h = o->runs / 2u;
+        s->median_run[c] = (o->runs % 2u) ? scratch[h] : 0.5 * (scratch[h - 1] + scratch[h]);
+        s->worst_run[c] = scratch[o->runs - 1];
+    }
+    s->us_per_frame = (double)ns / 1e3 / ((double)o->runs * o->frames);
+}
+
+static void json_num(const char *key, double v, int comma)
+{
+    if (isfinite(v)) {
+        printf("\"%s\": %.6g%s", key, v, comma ? ", " : "");
+    } else {
+        printf("\"%s\": null%s", key, comma ? ", " : "");
+    }
+}
+
+static void print_json(const opts_t *o, const summary_t *s)
+{
+    printf("{\"runs\": %u, \"frames\": %u, \"seed\": %llu, \"focal_px\": %.6g, "
+           "\"noise_px\": %.6g, \"rows\": [",
+           o->runs, o->frames, (unsigned long long)o->seed, o->focal_px, o->noise_px);
+    for (unsigned m = 0; m < o->n_methods; ++m) {
+        printf("%s{\"method\": \"%s\", ", m ? ", " : "", o->m[m]->name);
+        for (int c = 0; c < NCOL; ++c) {
+            json_num(col_name[c], s[m].mean[c], 1);
+        }
+        json_num("us_per_frame", s[m].us_per_frame, 1);
+        printf("\"lost_frames\": %llu, ", (unsigned long long)s[m].lost);
+        json_num("worst_run_tx", s[m].worst_run[0], 1);
+        json_num("median_run_tx", s[m].median_run[0], 1);
+        printf("\"worst_run_index\": %u}", s[m].worst_run_tx);
+    }
+    printf("]}\n");
+}
+
+static void print_cols(const char *label, const double v[NCOL], const char *fmt)
+{
+    printf("  %-22s", label);
+    for (int c = 0; c < NCOL; ++c) {
+        printf(fmt, v[c]);
+    }
+}
+
+static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_t *s)
+{
+    printf("rigpose-sim: the paper's simulation protocol (Table 1)\n"
+           "  %u runs x %u frames, seed %llu, %u thread%s\n"
+           "  6 cameras %ux%u, fx = fy = %g px, principal point at the image centre\n"
+           "  %u points in a shell %g..%g m; pixel noise sigma %g px\n"
+           "  mean absolute error per frame over frames 1..%u of every run (frame 0 defines "
+           "the world); m and rad\n\n",
+           o->runs, o->frames, (unsigned long long)o->seed, o->threads,
+           o->threads == 1 ? "" : "s", cfg->width, cfg->height, o->focal_px, cfg->n_points,
+           cfg->r_in, cfg->r_out, o->noise_px, o->frames - 1);
+    printf("  %-22s", "");
+    for (int c = 0; c < NCOL; ++c) {
+        printf("%10s", col_name[c]);
+    }
+    printf("%10s%8s\n", "us/frame", "lost");
+    for (unsigned m = 0; m < o->n_methods; ++m) {
+        const method_t *me = o->m[m];
+        const paper_row_t *pr = paper_row(me->paper);
+        char label[64];
+        snprintf(label, sizeof label, "%s", me->name);
+        print_cols(label, s[m].mean, "%10.6f");
+        printf("%10.1f%8llu\n", s[m].us_per_frame, (unsigned long long)s[m].lost);
+        if (pr) {
+            double ratio[NCOL];
+            snprintf(label, sizeof label, "paper, %s", pr->name);
+            print_cols(label, pr->v, "%10.4f");
+            printf("\n");
+            for (int c = 0; c < NCOL; ++c) {
+                ratio[c] = s[m].mean[c] / pr->v[c];
+            }
+            print_cols("ours / paper", ratio, "%10.2f");
+            printf("\n");
+        }
+        print_cols("per-run mean, median", s[m].median_run, "%10.6f");
+        printf("\n");
+        print_cols("per-run mean, worst", s[m].worst_run, "%10.6f");
+        printf("  (worst tx: run %u)\n\n", s[m].worst_run_tx);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    opts_t o;
+    const int pa = parse_args(argc, argv, &o);
+    if (pa != 0) {
+        usage(pa > 0 ? stdout : stderr, argv[0]);
+        return pa > 0 ? 0 : 2;
+    }
+    if (o.threads > o.runs) {
+        o.threads = o.runs;
+    }
+
+    job_t job;
+    memset(&job, 0, sizeof job);
+    job.o = &o;
+    rp_sim_default_cfg(&job.cfg);
+    job.cfg.focal_px = o.focal_px;
+    job.cfg.noise_px = o.noise_px;
+    job.cfg.n_frames = o.frames;
+    job.res = calloc((size_t)o.n_methods * o.runs, sizeof *job.res);
+    double *scratch = malloc((size_t)o.runs * sizeof *scratch);
+    summary_t *sum = calloc(o.n_methods, sizeof *sum);
+    if (!job.res || !scratch || !sum) {
+        fprintf(stderr, "rigpose-sim: out of memory\n");
+        return 1;
+    }
+    pthread_mutex_init(&job.lock, NULL);
+
+    pthread_t tid[MAX_THREADS];
+    unsigned started = 0;
+    for (unsigned t = 0; t < o.threads; ++t) {
+        if (pthread_create(&tid[t], NULL, worker, &job) != 0) {
+            break;
+        }
+        ++started;
+    }
+    if (started == 0) {
+        worker(&job); /* no threads to be had: do it here */
+    }
+    for (unsigned t = 0; t < started; ++t) {
+        pthread_join(tid[t], NULL);
+    }
+    pthread_mutex_destroy(&job.lock);
+    if (job.failed) {
+        fprintf(stderr, "rigpose-sim: %s\n", job.why);
+        return 1;
+    }
+    o.threads = started ? started : 1;
+
+    for (unsigned m = 0; m < o.n_methods; ++m) {
+        summarise(&o, &job.res[(size_t)m * o.runs], scratch, &sum[m]);
+    }
+    if (o.json) {
+        print_json(&o, sum);
+    } else {
+        print_table(&o, &job.cfg, sum);
+    }
+    free(sum);
+    free(scratch);
+    free(job.res);
+    return 0;
+}
