@@ -54,15 +54,8 @@
 #include <utility>
 #include <vector>
 
-/* rp_opts.h checks its limits with C11's _Static_assert, which C++14 spells static_assert. */
-#ifndef _Static_assert
-#define _Static_assert static_assert
-#endif
-/* rp_status.h and rp_sim.h have no extern "C" guards of their own. */
-extern "C" {
 #include "rigpose/rp_status.h"
 #include "rp_sim.h"
-}
 #include "rigpose/rp_camera.h"
 #include "rigpose/rp_rig.h"
 #include "rigpose/rp_rot.h"

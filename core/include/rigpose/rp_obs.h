@@ -5,6 +5,10 @@
 #ifndef RP_OBS_H
 #define RP_OBS_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #include "rp_opts.h"
 
 typedef struct {
@@ -13,5 +17,9 @@ typedef struct {
     rp_real w;      /* weight: the measurement's standard deviation is sigma_px / sqrt(w); 1 = nominal */
     uint8_t cam;    /* camera index in the rig */
 } rp_obs_t;
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* RP_OBS_H */

@@ -62,11 +62,18 @@ typedef double rp_real;
 #define RP_MIN_DEPTH 1e-3
 #endif
 
-_Static_assert(RP_MAX_CAMS >= 1 && RP_MAX_CAMS <= 16, "RP_MAX_CAMS out of range");
-_Static_assert(RP_MAX_PAIRS * 2 <= RP_MAX_CAMS, "each stereo pair needs two cameras");
-_Static_assert(RP_MAX_FEATS_PER_CAM >= 8 && RP_MAX_FEATS_PER_CAM <= 65535, "feature limit");
-_Static_assert(RP_MAX_LANDMARKS >= RP_MAX_FEATS_PER_CAM, "landmark table smaller than a camera");
-_Static_assert((RP_MAX_LANDMARKS & (RP_MAX_LANDMARKS - 1)) == 0, "RP_MAX_LANDMARKS: power of 2");
-_Static_assert(RP_LA_MAX_DIM >= 12, "the pose EKF needs 12x12 decompositions");
+/* C11 _Static_assert / C++ static_assert (the headers are also read by C++ host tools). */
+#ifdef __cplusplus
+#define RP_STATIC_ASSERT(cond, msg) static_assert(cond, msg)
+#else
+#define RP_STATIC_ASSERT(cond, msg) _Static_assert(cond, msg)
+#endif
+
+RP_STATIC_ASSERT(RP_MAX_CAMS >= 1 && RP_MAX_CAMS <= 16, "RP_MAX_CAMS out of range");
+RP_STATIC_ASSERT(RP_MAX_PAIRS * 2 <= RP_MAX_CAMS, "each stereo pair needs two cameras");
+RP_STATIC_ASSERT(RP_MAX_FEATS_PER_CAM >= 8 && RP_MAX_FEATS_PER_CAM <= 65535, "feature limit");
+RP_STATIC_ASSERT(RP_MAX_LANDMARKS >= RP_MAX_FEATS_PER_CAM, "landmark table smaller than a camera");
+RP_STATIC_ASSERT((RP_MAX_LANDMARKS & (RP_MAX_LANDMARKS - 1)) == 0, "RP_MAX_LANDMARKS: power of 2");
+RP_STATIC_ASSERT(RP_LA_MAX_DIM >= 12, "the pose EKF needs 12x12 decompositions");
 
 #endif /* RP_OPTS_H */

@@ -5,6 +5,10 @@
 #ifndef RP_STATUS_H
 #define RP_STATUS_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef enum {
     RP_OK = 0,
     RP_E_ARG,         /* null pointer, size out of range, index out of range, bad option value */
@@ -23,5 +27,9 @@ typedef enum {
 
 /* Short constant text for a status ("ok", "bad argument", ...); never NULL. */
 const char *rp_status_str(rp_status_t s);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* RP_STATUS_H */

@@ -19,6 +19,10 @@
 #ifndef RP_SIM_H
 #define RP_SIM_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #include <stdint.h>
 
 #include "rigpose/rp_frame.h"
@@ -72,5 +76,9 @@ void rp_rng_seed(rp_rng_t *r, uint64_t seed);
 uint64_t rp_rng_next(rp_rng_t *r);
 double rp_rng_uniform(rp_rng_t *r);   /* [0, 1) */
 double rp_rng_gauss(rp_rng_t *r);     /* N(0, 1) */
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* RP_SIM_H */
