@@ -14,6 +14,20 @@
 
 #include "rigpose/rp_opts.h"
 #include "rigpose/rp_status.h"
+#include "rp_sim.h"
+
+/* Uniform in [a, b) from the simulator's generator, seeded once per test program (tests are
+ * deterministic). */
+static inline double rp_test_urand(double a, double b)
+{
+    static rp_rng_t rng;
+    static int seeded = 0;
+    if (!seeded) {
+        rp_rng_seed(&rng, 0x5eedu);
+        seeded = 1;
+    }
+    return a + (b - a) * rp_rng_uniform(&rng);
+}
 
 /* Tolerance that means "exact up to rounding" for this build's scalar type. */
 #if RP_REAL_IS_FLOAT

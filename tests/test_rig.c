@@ -8,17 +8,8 @@
 
 #define PI 3.14159265358979323846
 
-static uint64_t rng_state = 0x2545f4914f6cdd1du;
-
-/* Uniform in [a, b) (xorshift64*, deterministic). */
-static double urand(double a, double b)
-{
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    const uint64_t r = rng_state * 0x2545f4914f6cdd1du;
-    return a + (b - a) * (double)(r >> 11) * (1.0 / 9007199254740992.0);
-}
+/* Uniform in [a, b), from one seeded generator per file (deterministic). */
+static double urand(double a, double b) { return rp_test_urand(a, b); }
 
 static void ry(double b, rp_real R[9])
 {
