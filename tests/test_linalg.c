@@ -41,25 +41,12 @@ static void assert_all_near(const rp_real *got, const double *want, size_t n, do
     }
 }
 
-/* ---- seeded random matrices ---------------------------------------------------------------- */
-
-static uint32_t rng_state;
-
-static void rng_seed(uint32_t s) { rng_state = s ? s : 1u; }
-
-/* Uniform in [-1, 1] (xorshift32). */
-static rp_real rng_uniform(void)
-{
-    rng_state ^= rng_state << 13;
-    rng_state ^= rng_state >> 17;
-    rng_state ^= rng_state << 5;
-    return (rp_real)((double)rng_state / 2147483647.5 - 1.0);
-}
+/* ---- random matrices (rp_test_urand: seeded once per program, so deterministic) ---------- */
 
 static void fill_random(rp_real *x, size_t n)
 {
     for (size_t i = 0; i < n; ++i) {
-        x[i] = rng_uniform();
+        x[i] = (rp_real)rp_test_urand(-1.0, 1.0);
     }
 }
 
@@ -497,7 +484,6 @@ static void test_backends_agree_on_products(void **state)
     enum { M = 2 * N_MAX + 3 };
     static rp_real a[M * M], b[M * M], c1[M * M], c2[M * M];
     const unsigned dims[][3] = {{1, 1, 1}, {3, 4, 2}, {7, 5, 9}, {N_MAX, N_MAX, N_MAX}, {M, 20, 11}};
-    rng_seed(11);
     for (unsigned t = 0; t < sizeof dims / sizeof dims[0]; ++t) {
         const unsigned m = dims[t][0], k = dims[t][1], n = dims[t][2];
         const double tol = RP_TOL(1e-14, 1e-6) * k;
@@ -524,7 +510,6 @@ static void test_backends_agree_on_products(void **state)
 static void test_backends_agree_on_cholesky_solve_and_inverse(void **state)
 {
     (void)state;
-    rng_seed(22);
     for (unsigned t = 0; t < N_SIZES; ++t) {
         const unsigned n = sizes[t], nn = n * n;
         rp_real a[N_MAX * N_MAX], l1[N_MAX * N_MAX], l2[N_MAX * N_MAX];
@@ -575,7 +560,6 @@ static void test_backends_agree_on_cholesky_solve_and_inverse(void **state)
 static void test_backends_agree_on_least_squares(void **state)
 {
     (void)state;
-    rng_seed(33);
     for (unsigned t = 0; t < N_SIZES; ++t) {
         const unsigned n = sizes[t];
         for (unsigned m = n; m <= N_MAX; m += (N_MAX - n) / 2 + 1) {
@@ -637,7 +621,6 @@ static void check_svd(const rp_real *a, const rp_real *u, const rp_real *s, cons
 static void test_backends_agree_on_singular_values(void **state)
 {
     (void)state;
-    rng_seed(44);
     for (unsigned t = 0; t < N_SIZES; ++t) {
         const unsigned n = sizes[t];
         for (unsigned m = n; m <= N_MAX; m += (N_MAX - n) / 2 + 1) {
