@@ -31,16 +31,7 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 
-/* rp_opts.h checks its limits with C11 _Static_assert, which C++ spells static_assert. */
-#ifndef _Static_assert
-#define _Static_assert static_assert
-#define RP_LAE_UNDEF_STATIC_ASSERT
-#endif
 #include "rigpose/rp_linalg.h"
-#ifdef RP_LAE_UNDEF_STATIC_ASSERT
-#undef _Static_assert
-#undef RP_LAE_UNDEF_STATIC_ASSERT
-#endif
 
 namespace {
 
