@@ -63,6 +63,8 @@ static const paper_row_t *paper_row(const char *name)
 
 typedef struct {
     double noise_px; /* simulated pixel noise, px (the filters' measurement sigma) */
+    unsigned ekf_iterations; /* Gauss-Newton iterations of the EKF update; 0 = the default */
+    int no_refine;           /* 1: keep the first triangulation (the paper's structure) */
 } method_opts_t;
 
 /* One estimator as the simulator drives it. `state_size` bytes are allocated once per thread
@@ -89,6 +91,12 @@ static rp_status_t stereo_init(void *state, const rp_rig_t *rig, const method_op
     }
     /* The filter needs sigma > 0: a noise-free simulation still gets a small one. */
     cfg.ekf.sigma_px = (rp_real)(o->noise_px > 0.01 ? o->noise_px : 0.01);
+    if (o->ekf_iterations) {
+        cfg.ekf.iterations = (uint8_t)o->ekf_iterations;
+    }
+    if (o->no_refine) {
+        cfg.refine_structure = 0;
+    }
     return rp_vo_stereo_init((rp_vo_stereo_t *)state, rig, &cfg);
 }
 
@@ -124,6 +132,8 @@ typedef struct {
     double focal_px, noise_px;
     unsigned threads;
     int json;
+    uint32_t ekf_iterations;
+    int no_refine;
 } opts_t;
 
 static void usage(FILE *out, const char *argv0)
@@ -145,6 +155,10 @@ static void usage(FILE *out, const char *argv0)
             "(default 800)\n"
             "  --noise-px S     Gaussian pixel noise sigma (default 0.5)\n"
             "  --threads N      worker threads (default: online CPUs)\n"
+            "  --ekf-iterations N  Gauss-Newton iterations of the EKF update (default 3;\n"
+            "                   1 = the plain EKF), for ablation\n"
+            "  --no-refine      keep each landmark's first triangulation (the paper's\n"
+            "                   structure) instead of refining it, for ablation\n"
             "  --json           print one JSON object instead of the table\n"
             "  --help           this text\n");
 }
@@ -250,6 +264,10 @@ static int parse_args(int argc, char **argv, opts_t *o)
             o->json = 1;
             continue;
         }
+        if (strcmp(arg, "--no-refine") == 0) {
+            o->no_refine = 1;
+            continue;
+        }
         /* --name value or --name=value */
         char name[32];
         const char *val;
@@ -289,6 +307,8 @@ static int parse_args(int argc, char **argv, opts_t *o)
             bad = parse_double(val, 1.0, 1e6, &o->focal_px);
         } else if (strcmp(name, "--noise-px") == 0) {
             bad = parse_double(val, 0.0, 100.0, &o->noise_px);
+        } else if (strcmp(name, "--ekf-iterations") == 0) {
+            bad = parse_u32(val, 1, 20, &o->ekf_iterations);
         } else if (strcmp(name, "--threads") == 0) {
             bad = parse_u32(val, 1, MAX_THREADS, &threads);
             o->threads = threads;
@@ -353,7 +373,7 @@ static void *worker(void *arg)
 {
     job_t *job = arg;
     const opts_t *o = job->o;
-    const method_opts_t mo = {o->noise_px};
+    const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine};
     void *state[MAX_METHODS] = {NULL};
     rp_frameset_t *fs = malloc(sizeof *fs);
     rp_rig_t rig;
@@ -517,6 +537,10 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
            o->runs, o->frames, (unsigned long long)o->seed, o->threads,
            o->threads == 1 ? "" : "s", cfg->width, cfg->height, o->focal_px, cfg->n_points,
            cfg->r_in, cfg->r_out, o->noise_px, o->frames - 1);
+    if (o->ekf_iterations || o->no_refine) {
+        printf("  ablation: EKF iterations %u, structure refinement %s\n\n",
+               o->ekf_iterations ? o->ekf_iterations : 3u, o->no_refine ? "off" : "on");
+    }
     printf("  %-22s", "");
     for (int c = 0; c < NCOL; ++c) {
         printf("%10s", col_name[c]);
