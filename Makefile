@@ -100,7 +100,7 @@ run: deps $(REL)/rigpose-sim
 
 # ---- tests -----------------------------------------------------------------------------------
 test: deps $(HOST_TEST_BINS) check-nomalloc
-	@tests/run_tests.sh $(HOST_TEST_BINS)
+	@tests/run_tests.sh $(HOST_TEST_BINS) $(HOST_EXTRA_TESTS)
 
 # The core never references the heap: check the symbols of every built core library.
 check-nomalloc: $(foreach v,$(VARIANTS),$(BUILD)/$(v)/librigpose_core.a) $(REL)/librigpose_core.a
@@ -132,6 +132,10 @@ test-arm: deps-cross $(ARM_TEST_BINS)
 
 # ---- benchmarks ------------------------------------------------------------------------------
 -include host_tools/bench/bench.mk
+
+# ---- extra test rules (C++ tests with an OpenCV oracle, ...) add to HOST_EXTRA_TESTS ------------
+HOST_EXTRA_TESTS :=
+-include $(sort $(wildcard tests/*.mk))
 
 clean:
 	rm -rf $(BUILD)
