@@ -133,7 +133,8 @@ test-arm: deps-cross $(ARM_TEST_BINS)
 # ---- benchmarks ------------------------------------------------------------------------------
 -include host_tools/bench/bench.mk
 
-# ---- extra test rules (C++ tests with an OpenCV oracle, ...) add to HOST_EXTRA_TESTS ------------
+# ---- extra test rules: each tests/*.mk builds its binaries (e.g. C++ tests with an OpenCV
+# oracle), appends them to HOST_EXTRA_TESTS (run by `make test`) and adds `test: <binaries>`.
 HOST_EXTRA_TESTS :=
 -include $(sort $(wildcard tests/*.mk))
 
