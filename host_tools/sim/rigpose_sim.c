@@ -22,6 +22,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "rigpose/rp_vo_gc.h"
 #include "rigpose/rp_vo_stereo.h"
 #include "rp_sim.h"
 
@@ -115,10 +116,36 @@ static rp_status_t stereo_step(void *state, const rp_frameset_t *fs, rp_estimate
     return rp_vo_stereo_step((rp_vo_stereo_t *)state, fs, est);
 }
 
+/* gc: the generalised camera over the four single cameras (rp_vo_gc.h). New features start at
+ * the shell's mid radius (0.667 + 1) / 2 m along their rays, +- 0.15 m. */
+static rp_status_t gc_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
+{
+    rp_vo_gc_cfg_t cfg = rp_vo_gc_default_cfg();
+    cfg.n_cams = 4;
+    cfg.cams[0] = RP_SIM_CAM1;
+    cfg.cams[1] = RP_SIM_CAM2;
+    cfg.cams[2] = RP_SIM_CAM3;
+    cfg.cams[3] = RP_SIM_CAM4;
+    cfg.init_depth_m = (rp_real)((0.667 + 1.0) / 2.0);
+    cfg.init_depth_sigma_m = (rp_real)0.15;
+    cfg.init_on_sphere = 1; /* the scene surrounds the rig: depth measured along the ray */
+    cfg.ekf.sigma_px = (rp_real)(o->noise_px > 0.01 ? o->noise_px : 0.01);
+    if (o->ekf_iterations) {
+        cfg.ekf.iterations = (uint8_t)o->ekf_iterations;
+    }
+    return rp_vo_gc_init((rp_vo_gc_t *)state, rig, &cfg);
+}
+
+static rp_status_t gc_step(void *state, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    return rp_vo_gc_step((rp_vo_gc_t *)state, fs, est);
+}
+
 static const method_t methods[] = {
     {"stereo4", "4 cameras", sizeof(rp_vo_stereo_t), stereo4_init, stereo_step},
     {"stereo2", "2 cameras", sizeof(rp_vo_stereo_t), stereo2_init, stereo_step},
     /* cam1..cam4 -> "cam 1".."cam 4", rc -> "RC", gc -> "2 cameras" (no paper row) */
+    {"gc", "2 cameras", sizeof(rp_vo_gc_t), gc_init, gc_step},
 };
 #define N_KNOWN_METHODS (sizeof methods / sizeof methods[0])
 

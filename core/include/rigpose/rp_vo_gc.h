@@ -1,0 +1,127 @@
+/*
+ * rp_vo_gc.h - the generalised camera (`gc`): rigpose's own method for the non-overlapping
+ * layout (beyond the paper, which fuses per-camera filters by rigidity constraints).
+ *
+ * One 12-state pose EKF (rp_ekf) takes the pixels of every tracked feature of every single
+ * camera of the layout through eq. (2): the known offsets D_k and rotations R_k of the cameras
+ * make the metric scale observable without any stereo matching. Each feature has its own
+ * 3-state structure EKF (rp_struct, world position).
+ *
+ * Per frame set:
+ *  1. Frame 0 (the world is cam1's frame now, pose exactly zero): every feature of every camera
+ *     of the layout becomes a landmark, initialised "orthographically": on the plane z = depth
+ *     (init_depth_m, in its camera) along its pixel's ray, with a covariance that is large along
+ *     the ray (init_depth_sigma_m on z: depth unknown) and small across it (pixel noise).
+ *  2. Later frames: EKF prediction, then the iterated update with every landmark's pixel. The
+ *     point's own uncertainty is carried into the pose update as a weight:
+ *     w = sigma^2 / (sigma^2 + l_max(J_M C J_M^T)), l_max the largest eigenvalue of the point
+ *     covariance projected into the image at the predicted pose (worst direction). A landmark
+ *     enters the pose update only once its depth is converged (its standard deviation along
+ *     the ray under mature_frac of its range); until then it only feeds its structure EKF.
+ *     While fewer than min_mature landmarks are converged (start-up), every landmark enters,
+ *     weighted as above.
+ *  3. After the pose update each observed landmark's structure EKF takes its pixel at the
+ *     updated pose, with the pose's projected uncertainty added to the pixel noise (the pose is
+ *     taken as known, but not as exact).
+ *  4. Features come and go: a landmark whose camera delivered an image without it is dropped
+ *     (its track was lost); a camera that delivered no image at all keeps its landmarks. When a
+ *     camera holds fewer than min_tracked landmarks, it is topped up from the *current* frame
+ *     once the pose is updated: its untracked features are initialised as in 1 at the updated
+ *     pose (no backtracking is needed: the new landmarks' depths are unknown anyway, and they
+ *     enter the pose update only once converged). The across-ray covariance of a topped-up
+ *     landmark includes the pose uncertainty.
+ * Output: an rp_estimate_t, the pose of cam1 in the world (rp_frame.h).
+ */
+#ifndef RP_VO_GC_H
+#define RP_VO_GC_H
+
+#include "rp_ekf.h"
+#include "rp_frame.h"
+#include "rp_obs.h"
+#include "rp_rig.h"
+#include "rp_struct.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    uint8_t n_cams;               /* cameras of the layout, 1..RP_MAX_CAMS */
+    uint8_t cams[RP_MAX_CAMS];    /* their rig indices (distinct) */
+    rp_ekf_params_t ekf;
+    uint16_t min_tracked;         /* per camera: top up under this many landmarks (50) */
+    rp_real init_depth_m;         /* assumed scene depth (camera z) of a new feature, m */
+    rp_real init_depth_sigma_m;   /* its prior standard deviation, m */
+    uint8_t init_on_sphere;       /* 0: new features on the plane z = init_depth_m of their
+                                   * camera (the paper's "orthographic" plane); 1: on the sphere
+                                   * of radius init_depth_m around the camera (depth measured
+                                   * along the ray: a scene that surrounds the robot) */
+    rp_real mature_frac;          /* a landmark enters the pose update once its standard
+                                   * deviation along its ray is under this fraction of its range;
+                                   * >= 1: every landmark enters at once */
+    uint16_t min_mature;          /* fewer converged landmarks than this: all of them enter */
+    rp_real default_dt_s;         /* frame interval used when timestamps are missing, s */
+    rp_real max_eff_obs;          /* the map's errors are correlated (every landmark was placed
+                                   * from estimated poses, at one assumed depth): the pose update
+                                   * gets at most the information of this many nominal
+                                   * observations (weights scaled down); <= 0: no cap */
+    rp_real scale_sigma;          /* relative standard deviation of the map's metric scale: adds
+                                   * scale_sigma^2 t t^T (t: translation since frame 0) to the
+                                   * reported translation covariance (not to the filter's) */
+    rp_real rot_drift_sigma;      /* orientation drift of the map, rad per sqrt(frame): adds
+                                   * rot_drift_sigma^2 * frame to the reported variance of each
+                                   * angle (not to the filter's) */
+} rp_vo_gc_cfg_t;
+
+/* Defaults: the paper's threshold of 50, depth 1 m +- 0.3 m, mature at 5 %, 1/30 s. */
+rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void);
+
+typedef struct {
+    uint32_t id;     /* feature id; RP_VO_GC_EMPTY_ID marks a free slot */
+    uint8_t cam;     /* camera that sees it */
+    uint8_t seen;    /* scratch: observed in the current frame */
+    uint8_t mature;  /* depth converged (enters the pose update) */
+    uint8_t pad_;
+    rp_point3_t pt;  /* world position (m) and its covariance */
+} rp_gc_landmark_t;
+
+#define RP_VO_GC_EMPTY_ID 0xFFFFFFFFu
+#define RP_VO_GC_MAX_OBS (RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM)
+
+typedef struct {
+    const rp_rig_t *rig;
+    rp_vo_gc_cfg_t cfg;
+    rp_ekf_t ekf;
+    rp_gc_landmark_t lm[RP_MAX_LANDMARKS]; /* hash table keyed by id: linear probing with
+                                            * backward-shift deletion, at most 3/4 full */
+    uint16_t n_lm;                         /* landmarks held */
+    uint16_t n_lm_cam[RP_MAX_CAMS];        /* landmarks held per rig camera */
+    uint32_t frame;                        /* frames processed */
+    int64_t prev_utime;
+    rp_obs_t obs[RP_VO_GC_MAX_OBS];        /* scratch: this frame's observations */
+    uint8_t used[RP_VO_GC_MAX_OBS];
+    uint8_t in_pose[RP_VO_GC_MAX_OBS];     /* scratch: obs[i] offered to the pose update */
+    uint32_t obs_id[RP_VO_GC_MAX_OBS];     /* scratch: landmark id of obs[i] */
+    rp_obs_t pobs[RP_VO_GC_MAX_OBS];       /* scratch: the pose update's subset */
+    uint8_t pused[RP_VO_GC_MAX_OBS];
+} rp_vo_gc_t;
+
+/* Set up the estimator for rig (which must outlive it) with cfg. The world is cam1's frame at
+ * the first frame set. RP_E_ARG (bad config: no camera, index out of range or repeated,
+ * min_tracked < 6, non-positive depth, sigma or dt, negative mature_frac), rp_rig_check's
+ * errors, rp_ekf_init's errors. */
+rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cfg_t *cfg);
+
+/* Process one frame set; fills est (never NULL) whatever happens.
+ * RP_OK: pose updated, or first frame initialised (est->flags say which).
+ * RP_E_TOO_FEW: too few features: est carries the prediction with RP_EST_LOST.
+ * RP_E_DIVERGED: the EKF rejected its update (covariance reset), est as predicted.
+ * RP_E_ARG: malformed frame set (count over the limit, features in a camera not in the rig);
+ *   it is ignored. Non-finite pixels are skipped. */
+rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t *est);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_VO_GC_H */

@@ -1,0 +1,647 @@
+/*
+ * rp_vo_gc.c - the generalised camera (see rp_vo_gc.h for the algorithm).
+ */
+#include <string.h>
+
+#include "priv/rp_math.h"
+#include "rigpose/rp_vo_gc.h"
+
+#define LM_CAP RP_MAX_LANDMARKS
+#define LM_MAX_FILL ((LM_CAP / 4) * 3)
+
+/* Prior standard deviations of the velocity when the filter starts (m/s, rad/s). */
+#define START_SIGMA_V RP_C(1.0)
+#define START_SIGMA_W RP_C(1.0)
+
+rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void)
+{
+    rp_vo_gc_cfg_t c;
+    memset(&c, 0, sizeof(c));
+    c.ekf = rp_ekf_default_params();
+    c.min_tracked = 50;
+    c.init_depth_m = RP_C(1.0);
+    c.init_depth_sigma_m = RP_C(0.3);
+    c.mature_frac = RP_C(0.05);
+    c.min_mature = 50;
+    c.default_dt_s = RP_C(1.0) / RP_C(30.0);
+    c.max_eff_obs = RP_C(0.0);
+    c.scale_sigma = RP_C(0.03);
+    c.rot_drift_sigma = RP_C(3e-4);
+    return c;
+}
+
+/* ---- landmark table (hash on id, linear probing, backward-shift deletion) ----------------- */
+
+static uint32_t hash_id(uint32_t id)
+{
+    id ^= id >> 16;
+    id *= 0x7feb352dU;
+    id ^= id >> 15;
+    id *= 0x846ca68bU;
+    id ^= id >> 16;
+    return id;
+}
+
+static rp_gc_landmark_t *lm_find(rp_vo_gc_t *vo, uint32_t id)
+{
+    uint32_t i = hash_id(id) & (LM_CAP - 1);
+    while (vo->lm[i].id != RP_VO_GC_EMPTY_ID) {
+        if (vo->lm[i].id == id) {
+            return &vo->lm[i];
+        }
+        i = (i + 1) & (LM_CAP - 1);
+    }
+    return NULL;
+}
+
+static rp_status_t lm_insert(rp_vo_gc_t *vo, uint32_t id, uint8_t cam, const rp_point3_t *pt)
+{
+    if (vo->n_lm >= LM_MAX_FILL) {
+        return RP_E_FULL;
+    }
+    uint32_t i = hash_id(id) & (LM_CAP - 1);
+    while (vo->lm[i].id != RP_VO_GC_EMPTY_ID) {
+        if (vo->lm[i].id == id) {
+            return RP_E_ARG; /* already held */
+        }
+        i = (i + 1) & (LM_CAP - 1);
+    }
+    rp_gc_landmark_t *l = &vo->lm[i];
+    memset(l, 0, sizeof(*l));
+    l->id = id;
+    l->cam = cam;
+    l->pt = *pt;
+    vo->n_lm++;
+    vo->n_lm_cam[cam]++;
+    return RP_OK;
+}
+
+static void lm_remove_slot(rp_vo_gc_t *vo, uint32_t i)
+{
+    vo->n_lm--;
+    vo->n_lm_cam[vo->lm[i].cam]--;
+    uint32_t hole = i;
+    uint32_t j = i;
+    for (;;) {
+        j = (j + 1) & (LM_CAP - 1);
+        if (vo->lm[j].id == RP_VO_GC_EMPTY_ID) {
+            break;
+        }
+        uint32_t home = hash_id(vo->lm[j].id) & (LM_CAP - 1);
+        int in_range = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+        if (!in_range) {
+            vo->lm[hole] = vo->lm[j];
+            hole = j;
+        }
+    }
+    vo->lm[hole].id = RP_VO_GC_EMPTY_ID;
+}
+
+static void lm_clear(rp_vo_gc_t *vo)
+{
+    for (uint32_t i = 0; i < LM_CAP; ++i) {
+        vo->lm[i].id = RP_VO_GC_EMPTY_ID;
+    }
+    vo->n_lm = 0;
+    memset(vo->n_lm_cam, 0, sizeof(vo->n_lm_cam));
+}
+
+/* Drop every landmark not seen this frame whose camera delivered an image (its track was
+ * lost); landmarks of cameras without an image are kept. Clears the marks. */
+static void lm_drop_lost(rp_vo_gc_t *vo, const uint8_t had_image[RP_MAX_CAMS])
+{
+    uint32_t i = 0;
+    while (i < LM_CAP) {
+        rp_gc_landmark_t *l = &vo->lm[i];
+        if (l->id != RP_VO_GC_EMPTY_ID && !l->seen && had_image[l->cam]) {
+            lm_remove_slot(vo, i);
+            continue; /* slot i now holds a shifted entry (or is empty): look again */
+        }
+        ++i;
+    }
+    for (i = 0; i < LM_CAP; ++i) {
+        vo->lm[i].seen = 0;
+    }
+}
+
+/* ---- set-up ------------------------------------------------------------------------------ */
+
+static void start_ekf(rp_vo_gc_t *vo)
+{
+    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
+    for (int i = 0; i < 6; ++i) {
+        P0[i] = RP_C(1e-12); /* the pose at frame 0 is the origin by definition */
+        P0[6 + i] = i < 3 ? START_SIGMA_V * START_SIGMA_V : START_SIGMA_W * START_SIGMA_W;
+    }
+    (void)rp_ekf_init(&vo->ekf, &vo->cfg.ekf, x0, P0);
+}
+
+rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cfg_t *cfg)
+{
+    if (!vo || !rig || !cfg) {
+        return RP_E_ARG;
+    }
+    rp_status_t st = rp_rig_check(rig);
+    if (st != RP_OK) {
+        return st;
+    }
+    if (!rp_finite(cfg->max_eff_obs) || !rp_finite(cfg->scale_sigma) ||
+        cfg->scale_sigma < RP_C(0.0) || !rp_finite(cfg->rot_drift_sigma) ||
+        cfg->rot_drift_sigma < RP_C(0.0)) {
+        return RP_E_ARG;
+    }
+    if (cfg->n_cams < 1 || cfg->n_cams > RP_MAX_CAMS || cfg->min_tracked < 6 ||
+        !(cfg->init_depth_m > RP_C(0.0)) || !rp_finite(cfg->init_depth_m) ||
+        !(cfg->init_depth_sigma_m > RP_C(0.0)) || !rp_finite(cfg->init_depth_sigma_m) ||
+        !(cfg->mature_frac >= RP_C(0.0)) || !rp_finite(cfg->mature_frac) ||
+        !(cfg->default_dt_s > RP_C(0.0)) || !rp_finite(cfg->default_dt_s)) {
+        return RP_E_ARG;
+    }
+    uint8_t in_use[RP_MAX_CAMS] = {0};
+    for (uint8_t k = 0; k < cfg->n_cams; ++k) {
+        uint8_t c = cfg->cams[k];
+        if (c >= rig->n_cams || in_use[c]) {
+            return RP_E_ARG;
+        }
+        in_use[c] = 1;
+    }
+    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
+    for (int i = 0; i < RP_EKF_N; ++i) {
+        P0[i] = RP_C(1.0);
+    }
+    rp_ekf_t probe;
+    st = rp_ekf_init(&probe, &cfg->ekf, x0, P0); /* checks the EKF parameters */
+    if (st != RP_OK) {
+        return st;
+    }
+    memset(vo, 0, sizeof(*vo));
+    vo->rig = rig;
+    vo->cfg = *cfg;
+    vo->ekf = probe;
+    lm_clear(vo);
+    return RP_OK;
+}
+
+/* ---- orthographic initialisation of a feature -------------------------------------------- */
+
+/* Landmark for pixel uv of camera cam at pose pl: on the plane z = init_depth_m of the camera,
+ * covariance sigma_z^2 d d^T along the ray d = (xn, 1) plus an isotropic across-ray part from
+ * the pixel noise and the pose uncertainty (Ppp, 6x6 row-major, may be NULL). */
+static rp_status_t init_feature(const rp_vo_gc_t *vo, uint8_t cam, const rp_real uv[2],
+                                const rp_pose_lin_t *pl, const rp_real *Ppp, rp_point3_t *pt)
+{
+    const rp_rig_cam_t *rc = &vo->rig->cam[cam];
+    rp_real xn[2];
+    rp_status_t st = rp_cam_unproject(&rc->cam, uv, xn);
+    if (st != RP_OK) {
+        return st;
+    }
+    const rp_real d[3] = {xn[0], xn[1], RP_C(1.0)};
+    const rp_real dn = rp_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    /* on the plane z = depth, or on the sphere of radius depth around the camera */
+    const rp_real z = vo->cfg.init_on_sphere ? vo->cfg.init_depth_m / dn : vo->cfg.init_depth_m;
+    const rp_real P[3] = {z * d[0], z * d[1], z};
+    const rp_real range = z * dn;
+    const rp_real u[3] = {d[0] / dn, d[1] / dn, d[2] / dn};
+    const rp_real f = rc->cam.fx > rc->cam.fy ? rc->cam.fx : rc->cam.fy;
+    const rp_real ang = vo->cfg.ekf.sigma_px / f; /* rad per pixel-noise sigma */
+    rp_real perp2 = range * range * ang * ang;
+    if (Ppp) {
+        perp2 += (Ppp[0] + Ppp[7] + Ppp[14]) / RP_C(3.0) +
+                 range * range * (Ppp[21] + Ppp[28] + Ppp[35]) / RP_C(3.0);
+    }
+    /* variance of z: the configured sigma is on z (plane) or on the range (sphere) */
+    const rp_real sz = vo->cfg.init_on_sphere ? vo->cfg.init_depth_sigma_m / dn
+                                              : vo->cfg.init_depth_sigma_m;
+    const rp_real sz2 = sz * sz;
+    rp_real Cc[9];
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            Cc[a * 3 + b] = sz2 * d[a] * d[b] + perp2 * ((a == b ? RP_C(1.0) : RP_C(0.0)) -
+                                                         u[a] * u[b]);
+        }
+    }
+    /* camera -> world: Rw = R_j R_k; C_w = Rw Cc Rw^T */
+    rp_real Rw[9], T[9], Cw[9];
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            rp_real acc = RP_C(0.0);
+            for (int k = 0; k < 3; ++k) {
+                acc += pl->R[a * 3 + k] * rc->R[k * 3 + b];
+            }
+            Rw[a * 3 + b] = acc;
+        }
+    }
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            rp_real acc = RP_C(0.0);
+            for (int k = 0; k < 3; ++k) {
+                acc += Rw[a * 3 + k] * Cc[k * 3 + b];
+            }
+            T[a * 3 + b] = acc;
+        }
+    }
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            rp_real acc = RP_C(0.0);
+            for (int k = 0; k < 3; ++k) {
+                acc += T[a * 3 + k] * Rw[b * 3 + k];
+            }
+            Cw[a * 3 + b] = acc;
+        }
+    }
+    st = rp_rig_world_point(vo->rig, cam, pl, P, pt->M);
+    if (st != RP_OK) {
+        return st;
+    }
+    pt->C[0] = Cw[0];
+    pt->C[1] = RP_C(0.5) * (Cw[1] + Cw[3]);
+    pt->C[2] = RP_C(0.5) * (Cw[2] + Cw[6]);
+    pt->C[3] = Cw[4];
+    pt->C[4] = RP_C(0.5) * (Cw[5] + Cw[7]);
+    pt->C[5] = Cw[8];
+    if (!rp_all_finite(pt->M, 3) || !rp_all_finite(pt->C, 6)) {
+        return RP_E_NAN;
+    }
+    return RP_OK;
+}
+
+/* Add every finite feature of camera cam in fs that is not yet a landmark, at pose pl.
+ * Returns how many were added. */
+static uint16_t top_up_camera(rp_vo_gc_t *vo, const rp_frameset_t *fs, uint8_t cam,
+                              const rp_pose_lin_t *pl, const rp_real *Ppp)
+{
+    uint16_t added = 0;
+    for (uint16_t f = 0; f < fs->n[cam]; ++f) {
+        const rp_feat_t *ft = &fs->f[cam][f];
+        if (ft->id == RP_VO_GC_EMPTY_ID || !rp_all_finite(ft->uv, 2) || lm_find(vo, ft->id)) {
+            continue;
+        }
+        rp_point3_t pt;
+        if (init_feature(vo, cam, ft->uv, pl, Ppp, &pt) != RP_OK) {
+            continue;
+        }
+        if (lm_insert(vo, ft->id, cam, &pt) != RP_OK) {
+            break; /* table full (or id in two cameras): keep what we have */
+        }
+        added++;
+    }
+    return added;
+}
+
+/* ---- small helpers ----------------------------------------------------------------------- */
+
+/* Largest eigenvalue of the symmetric 2x2 [a b; b d]. */
+static rp_real eig2_max(rp_real a, rp_real b, rp_real d)
+{
+    const rp_real h = RP_C(0.5) * (a - d);
+    return RP_C(0.5) * (a + d) + rp_sqrt(h * h + b * b);
+}
+
+/* Largest eigenvalue of J C J^T with J 2 x n, C n x n symmetric (row-major; packed3 = 1: C is
+ * the packed 3x3 of rp_point3_t). */
+static rp_real proj_var_max(const rp_real *J, int n, const rp_real *C, int packed3)
+{
+    rp_real Cf[36];
+    if (packed3) {
+        const rp_real *c = C;
+        Cf[0] = c[0]; Cf[1] = c[1]; Cf[2] = c[2];
+        Cf[3] = c[1]; Cf[4] = c[3]; Cf[5] = c[4];
+        Cf[6] = c[2]; Cf[7] = c[4]; Cf[8] = c[5];
+        C = Cf;
+    }
+    rp_real S[4];
+    for (int r = 0; r < 2; ++r) {
+        for (int q = r; q < 2; ++q) {
+            rp_real acc = RP_C(0.0);
+            for (int a = 0; a < n; ++a) {
+                rp_real t = RP_C(0.0);
+                for (int b = 0; b < n; ++b) {
+                    t += C[a * n + b] * J[q * n + b];
+                }
+                acc += J[r * n + a] * t;
+            }
+            S[r * 2 + q] = acc;
+        }
+    }
+    return eig2_max(S[0], S[1], S[3]);
+}
+
+/* Standard deviation of landmark l along its ray from camera cam at pose pl, and the range. */
+static void ray_sigma(const rp_vo_gc_t *vo, const rp_gc_landmark_t *l, const rp_pose_lin_t *pl,
+                      rp_real *sigma, rp_real *range)
+{
+    const rp_rig_cam_t *rc = &vo->rig->cam[l->cam];
+    rp_real c[3], u[3];
+    for (int a = 0; a < 3; ++a) {
+        c[a] = pl->p[a] + pl->R[a * 3 + 0] * rc->D[0] + pl->R[a * 3 + 1] * rc->D[1] +
+               pl->R[a * 3 + 2] * rc->D[2];
+        u[a] = l->pt.M[a] - c[a];
+    }
+    const rp_real r = rp_sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    *range = r;
+    if (!(r > RP_C(0.0))) {
+        *sigma = RP_C(1e30);
+        return;
+    }
+    for (int a = 0; a < 3; ++a) {
+        u[a] /= r;
+    }
+    const rp_real *k = l->pt.C;
+    const rp_real v = u[0] * (k[0] * u[0] + k[1] * u[1] + k[2] * u[2]) +
+                      u[1] * (k[1] * u[0] + k[3] * u[1] + k[4] * u[2]) +
+                      u[2] * (k[2] * u[0] + k[4] * u[1] + k[5] * u[2]);
+    *sigma = v > RP_C(0.0) ? rp_sqrt(v) : RP_C(0.0);
+}
+
+static int cam_in_layout(const rp_vo_gc_t *vo, uint8_t cam)
+{
+    for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
+        if (vo->cfg.cams[k] == cam) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Gather the observations of held landmarks in fs into vo->obs; marks them seen. */
+static uint32_t gather_obs(rp_vo_gc_t *vo, const rp_frameset_t *fs)
+{
+    uint32_t n = 0;
+    for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
+        const uint8_t cam = vo->cfg.cams[k];
+        for (uint16_t f = 0; f < fs->n[cam]; ++f) {
+            const rp_feat_t *ft = &fs->f[cam][f];
+            if (!rp_all_finite(ft->uv, 2)) {
+                continue;
+            }
+            rp_gc_landmark_t *l = lm_find(vo, ft->id);
+            if (!l || l->cam != cam) {
+                continue;
+            }
+            l->seen = 1;
+            rp_obs_t *o = &vo->obs[n];
+            o->uv[0] = ft->uv[0];
+            o->uv[1] = ft->uv[1];
+            memcpy(o->M, l->pt.M, sizeof(o->M));
+            o->w = RP_C(1.0);
+            o->cam = cam;
+            vo->obs_id[n] = ft->id;
+            n++;
+        }
+    }
+    return n;
+}
+
+static void fill_estimate(const rp_vo_gc_t *vo, const rp_frameset_t *fs, uint32_t flags,
+                          rp_estimate_t *est)
+{
+    est->utime = fs ? fs->utime : vo->prev_utime;
+    est->frame = vo->frame;
+    for (int i = 0; i < 6; ++i) {
+        est->p[i] = vo->ekf.x[i];
+        est->v[i] = vo->ekf.x[6 + i];
+        for (int j = 0; j < 6; ++j) {
+            est->cov[i * 6 + j] = vo->ekf.P[i * RP_EKF_N + j];
+        }
+    }
+    /* the map's scale uncertainty, common to every landmark */
+    const rp_real s2 = vo->cfg.scale_sigma * vo->cfg.scale_sigma;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            est->cov[i * 6 + j] += s2 * vo->ekf.x[i] * vo->ekf.x[j];
+        }
+    }
+    const rp_real r2 = vo->cfg.rot_drift_sigma * vo->cfg.rot_drift_sigma * (rp_real)vo->frame;
+    for (int i = 3; i < 6; ++i) {
+        est->cov[i * 6 + i] += r2;
+    }
+    est->flags = flags;
+    est->n_landmarks = vo->n_lm;
+}
+
+static rp_status_t validate_frameset(const rp_vo_gc_t *vo, const rp_frameset_t *fs)
+{
+    for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        if (fs->n[cam] > RP_MAX_FEATS_PER_CAM) {
+            return RP_E_ARG;
+        }
+        if (cam >= vo->rig->n_cams && fs->n[cam] != 0) {
+            return RP_E_ARG;
+        }
+    }
+    return RP_OK;
+}
+
+static void pose_cov(const rp_vo_gc_t *vo, rp_real Ppp[36])
+{
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            Ppp[i * 6 + j] = vo->ekf.P[i * RP_EKF_N + j];
+        }
+    }
+}
+
+/* ---- the step ---------------------------------------------------------------------------- */
+
+static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    static const rp_real zero[6] = {0};
+    rp_pose_lin_t pl;
+    (void)rp_pose_lin_set(&pl, zero);
+    lm_clear(vo);
+    start_ekf(vo);
+    uint32_t flags = RP_EST_INITIALISING;
+    for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
+        const uint8_t cam = vo->cfg.cams[k];
+        (void)top_up_camera(vo, fs, cam, &pl, NULL);
+        if (vo->n_lm_cam[cam] < vo->cfg.min_tracked) {
+            flags |= RP_EST_DEGRADED;
+        }
+    }
+    vo->frame = 1;
+    vo->prev_utime = fs->utime;
+    fill_estimate(vo, fs, flags | RP_EST_SCALE_WEAK, est);
+    est->frame = 0;
+    return vo->n_lm >= 6 ? RP_OK : RP_E_TOO_FEW;
+}
+
+/* Weights and maturity of the gathered observations at the predicted pose; fills vo->pobs
+ * with the ones offered to the pose update. Returns their number; *n_mature the mature ones. */
+static uint32_t select_for_pose(rp_vo_gc_t *vo, uint32_t n, uint32_t *n_mature)
+{
+    rp_pose_lin_t pl;
+    *n_mature = 0;
+    if (rp_pose_lin_set(&pl, vo->ekf.x) != RP_OK) {
+        return 0;
+    }
+    const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
+    for (uint32_t i = 0; i < n; ++i) {
+        rp_gc_landmark_t *l = lm_find(vo, vo->obs_id[i]);
+        rp_obs_t *o = &vo->obs[i];
+        rp_real uv[2], JM[6];
+        vo->in_pose[i] = 0;
+        if (!l || rp_rig_project(vo->rig, o->cam, &pl, o->M, uv, NULL, JM) != RP_OK) {
+            o->w = RP_C(0.0);
+            continue;
+        }
+        const rp_real lam = proj_var_max(JM, 3, l->pt.C, 1);
+        o->w = s2 / (s2 + (lam > RP_C(0.0) ? lam : RP_C(0.0)));
+        if (!l->mature) {
+            rp_real sig, range;
+            ray_sigma(vo, l, &pl, &sig, &range);
+            if (sig < vo->cfg.mature_frac * range) {
+                l->mature = 1;
+            }
+        }
+        if (l->mature) {
+            (*n_mature)++;
+        }
+    }
+    const int all = *n_mature < vo->cfg.min_mature;
+    uint32_t m = 0;
+    rp_real wsum = RP_C(0.0);
+    for (uint32_t i = 0; i < n; ++i) {
+        const rp_gc_landmark_t *l = lm_find(vo, vo->obs_id[i]);
+        if (!l || !(vo->obs[i].w > RP_C(0.0)) || (!all && !l->mature)) {
+            continue;
+        }
+        vo->in_pose[i] = 1;
+        vo->pobs[m++] = vo->obs[i];
+        wsum += vo->obs[i].w;
+    }
+    if (vo->cfg.max_eff_obs > RP_C(0.0) && wsum > vo->cfg.max_eff_obs) {
+        const rp_real k = vo->cfg.max_eff_obs / wsum;
+        for (uint32_t i = 0; i < m; ++i) {
+            vo->pobs[i].w *= k;
+        }
+    }
+    return m;
+}
+
+/* Each observed landmark's structure EKF takes its pixel at the updated pose, with the pose's
+ * projected uncertainty added to the pixel noise. */
+static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
+{
+    rp_pose_lin_t pl;
+    if (rp_pose_lin_set(&pl, vo->ekf.x) != RP_OK) {
+        return;
+    }
+    rp_real Ppp[36];
+    pose_cov(vo, Ppp);
+    const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
+    for (uint32_t i = 0; i < n; ++i) {
+        rp_gc_landmark_t *l = lm_find(vo, vo->obs_id[i]);
+        if (!l) {
+            continue;
+        }
+        rp_real uv[2], Jp[12];
+        if (rp_rig_project(vo->rig, l->cam, &pl, l->pt.M, uv, Jp, NULL) != RP_OK) {
+            continue;
+        }
+        const rp_real lam = proj_var_max(Jp, 6, Ppp, 0);
+        const rp_real sig = rp_sqrt(s2 + (lam > RP_C(0.0) ? lam : RP_C(0.0)));
+        /* a rejected update leaves the point as it was */
+        (void)rp_struct_update(&l->pt, vo->rig, l->cam, &pl, vo->obs[i].uv, sig,
+                               vo->cfg.ekf.gate_chi2);
+    }
+}
+
+rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    if (!vo || !est) {
+        return RP_E_ARG;
+    }
+    memset(est, 0, sizeof(*est));
+    if (!fs || !vo->rig) {
+        fill_estimate(vo, NULL, RP_EST_LOST, est);
+        return RP_E_ARG;
+    }
+    if (validate_frameset(vo, fs) != RP_OK) {
+        fill_estimate(vo, NULL, RP_EST_LOST, est);
+        return RP_E_ARG;
+    }
+    if (vo->frame == 0) {
+        return first_frame(vo, fs, est);
+    }
+
+    rp_real dt = vo->cfg.default_dt_s;
+    if (fs->utime > vo->prev_utime) {
+        dt = (rp_real)(fs->utime - vo->prev_utime) * RP_C(1e-6);
+    }
+    uint32_t flags = 0;
+
+    uint8_t had_image[RP_MAX_CAMS] = {0};
+    for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        had_image[cam] = (uint8_t)(fs->n[cam] > 0 && cam_in_layout(vo, cam));
+    }
+    /* Which landmarks are still tracked; lost tracks are dropped. */
+    const uint32_t n = gather_obs(vo, fs);
+    lm_drop_lost(vo, had_image);
+
+    rp_status_t st = rp_ekf_predict(&vo->ekf, dt);
+    uint16_t n_gated = 0;
+    uint32_t n_mature = 0;
+    for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        est->n_used[cam] = 0;
+    }
+    if (st == RP_OK) {
+        const uint32_t m = select_for_pose(vo, n, &n_mature);
+        rp_ekf_info_t info;
+        st = rp_ekf_update(&vo->ekf, vo->rig, vo->pobs, m, vo->pused, &info);
+        n_gated = info.n_gated;
+        if (info.cov_reset) {
+            flags |= RP_EST_COV_RESET;
+        }
+        if (st == RP_OK) {
+            for (uint32_t i = 0, k = 0; i < n; ++i) {
+                vo->used[i] = 0;
+                if (vo->in_pose[i]) {
+                    vo->used[i] = vo->pused[k++];
+                    if (vo->used[i]) {
+                        est->n_used[vo->obs[i].cam]++;
+                    }
+                }
+            }
+        }
+    }
+
+    if (st == RP_OK) {
+        flags |= RP_EST_TRACKING;
+        if (n_gated > 0) {
+            flags |= RP_EST_GATED;
+        }
+        if (n_mature < vo->cfg.min_mature) {
+            flags |= RP_EST_SCALE_WEAK;
+        }
+        refine_structure(vo, n);
+    } else {
+        flags |= RP_EST_LOST;
+    }
+
+    /* Top up cameras under their threshold from this frame, at the (updated) pose. */
+    rp_pose_lin_t pl;
+    if (rp_pose_lin_set(&pl, vo->ekf.x) == RP_OK) {
+        rp_real Ppp[36];
+        pose_cov(vo, Ppp);
+        for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
+            const uint8_t cam = vo->cfg.cams[k];
+            if (vo->n_lm_cam[cam] < vo->cfg.min_tracked && had_image[cam]) {
+                if (top_up_camera(vo, fs, cam, &pl, Ppp) > 0) {
+                    flags |= RP_EST_REINIT;
+                }
+            }
+        }
+    }
+    for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
+        if (vo->n_lm_cam[vo->cfg.cams[k]] < vo->cfg.min_tracked || !had_image[vo->cfg.cams[k]]) {
+            flags |= RP_EST_DEGRADED;
+        }
+    }
+
+    vo->prev_utime = fs->utime;
+    fill_estimate(vo, fs, flags, est);
+    est->n_gated = n_gated;
+    vo->frame++;
+    return st == RP_OK ? RP_OK : (st == RP_E_DIVERGED ? RP_E_DIVERGED : RP_E_TOO_FEW);
+}
