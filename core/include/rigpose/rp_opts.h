@@ -62,6 +62,33 @@ typedef double rp_real;
 #define RP_MIN_DEPTH 1e-3
 #endif
 
+/* ---- image front end (tracker) ------------------------------------------------------------- */
+/* Largest grey image a tracker accepts, pixels. */
+#ifndef RP_TRACK_MAX_W
+#define RP_TRACK_MAX_W 640
+#endif
+#ifndef RP_TRACK_MAX_H
+#define RP_TRACK_MAX_H 480
+#endif
+
+/* Pyramid levels including the full-resolution one (OpenCV's maxLevel + 1). */
+#ifndef RP_TRACK_MAX_LEVELS
+#define RP_TRACK_MAX_LEVELS 4
+#endif
+
+/* Largest Lucas-Kanade window side, pixels (odd). */
+#ifndef RP_TRACK_MAX_WIN
+#define RP_TRACK_MAX_WIN 31
+#endif
+
+/* Detection: largest bucketing grid (cells) and candidates kept per cell. */
+#ifndef RP_TRACK_MAX_CELLS
+#define RP_TRACK_MAX_CELLS 64
+#endif
+#ifndef RP_TRACK_CELL_CANDS
+#define RP_TRACK_CELL_CANDS 24
+#endif
+
 /* C11 _Static_assert / C++ static_assert (the headers are also read by C++ host tools). */
 #ifdef __cplusplus
 #define RP_STATIC_ASSERT(cond, msg) static_assert(cond, msg)
@@ -75,5 +102,11 @@ RP_STATIC_ASSERT(RP_MAX_FEATS_PER_CAM >= 8 && RP_MAX_FEATS_PER_CAM <= 65535, "fe
 RP_STATIC_ASSERT(RP_MAX_LANDMARKS >= RP_MAX_FEATS_PER_CAM, "landmark table smaller than a camera");
 RP_STATIC_ASSERT((RP_MAX_LANDMARKS & (RP_MAX_LANDMARKS - 1)) == 0, "RP_MAX_LANDMARKS: power of 2");
 RP_STATIC_ASSERT(RP_LA_MAX_DIM >= 12, "the pose EKF needs 12x12 decompositions");
+RP_STATIC_ASSERT(RP_TRACK_MAX_W >= 32 && RP_TRACK_MAX_W <= 4096, "RP_TRACK_MAX_W out of range");
+RP_STATIC_ASSERT(RP_TRACK_MAX_H >= 32 && RP_TRACK_MAX_H <= 4096, "RP_TRACK_MAX_H out of range");
+RP_STATIC_ASSERT(RP_TRACK_MAX_LEVELS >= 1 && RP_TRACK_MAX_LEVELS <= 6, "pyramid levels 1..6");
+RP_STATIC_ASSERT(RP_TRACK_MAX_WIN >= 5 && RP_TRACK_MAX_WIN <= 63 && (RP_TRACK_MAX_WIN & 1),
+                 "LK window: odd, 5..63");
+RP_STATIC_ASSERT(RP_TRACK_MAX_CELLS >= 1 && RP_TRACK_CELL_CANDS >= 1, "detection grid");
 
 #endif /* RP_OPTS_H */

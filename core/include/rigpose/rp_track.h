@@ -1,0 +1,145 @@
+/*
+ * rp_track.h - the per-camera image front end: Gaussian pyramids, Shi-Tomasi corners with
+ * non-maximum suppression, minimum distance and spatial bucketing, pyramidal Lucas-Kanade tracking
+ * with a forward-backward check, and top-up detection. Integer / fixed-point image arithmetic;
+ * rp_real only for the output positions. Caller-owned state: `static rp_tracker_t trk;` per camera.
+ *
+ * Fixed-point formats used throughout (named in the code):
+ *   positions   int32 Q16 pixels (origin at the top-left pixel centre), level coordinates
+ *   gradients   int16 Scharr ([3 10 3] x [-1 0 1]: 32x the derivative in grey levels / px)
+ *   intensities interpolated in Q5 (grey level x 32), bilinear weights Q14 (as OpenCV's LK)
+ *   sums        int64 (structure tensor, mismatch vector); detection responses int32
+ */
+#ifndef RP_TRACK_H
+#define RP_TRACK_H
+
+#include "rp_frame.h"
+#include "rp_opts.h"
+#include "rp_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A caller-owned 8-bit grey image, row-major: pixel (u, v) is data[v * stride + u].
+ * size is the number of readable bytes at data: an image is truncated (rejected) when
+ * size < stride * (h - 1) + w. */
+typedef struct {
+    const uint8_t *data;
+    uint16_t w, h;   /* pixels */
+    uint32_t stride; /* bytes between rows, >= w */
+    uint32_t size;   /* readable bytes at data */
+} rp_image_t;
+
+typedef struct {
+    uint8_t cam;         /* camera index 0..RP_MAX_CAMS-1; ids are cam + RP_MAX_CAMS * k */
+    uint8_t levels;      /* pyramid levels incl. full resolution, 1..RP_TRACK_MAX_LEVELS (4) */
+    uint8_t win;         /* LK window side, px, odd, 5..RP_TRACK_MAX_WIN (21) */
+    uint8_t max_iter;    /* LK iterations per level (30) */
+    uint32_t eps_q16;    /* LK convergence: step shorter than this, Q16 px (0.01 px = 655) */
+    uint32_t min_eig;    /* drop a track whose gradient matrix has min eigenvalue / window area
+                          * below this, Scharr units^2 / 2^20 (OpenCV's minEigThreshold * 2^20;
+                          * 105 = its default 1e-4) */
+    uint32_t fb_max_q16; /* forward-backward tolerance, Q16 px (1 px = 65536); 0 = no check */
+    uint16_t target;     /* features wanted (150) */
+    uint16_t topup_below; /* detect again when fewer tracks than this survive (target) */
+    uint16_t min_dist;   /* smallest distance between features, px (10) */
+    uint16_t quality_q16; /* corner response relative to the frame's best, Q16 (0.01 = 655) */
+    uint32_t min_response; /* absolute floor on 2x the min eigenvalue of the 3x3 Sobel
+                            * structure tensor (Sobel units^2); rejects noise on flat images */
+    uint8_t grid_x, grid_y; /* bucketing grid, cells (grid_x * grid_y <= RP_TRACK_MAX_CELLS) */
+    uint16_t cell_cap;   /* features per cell at most (0 = 2 * target / cells + 1) */
+    uint8_t min_contrast; /* max - min grey level below this: a blank frame (skipped) */
+    uint16_t max_err_q5; /* drop a track whose window still differs by more than this mean
+                          * |J - I| after converging, grey levels Q5 (20 levels = 640); 0 = off */
+} rp_track_cfg_t;
+
+/* Events of one rp_track_process call, as flags. */
+enum {
+    RP_TRACK_FIRST     = 1u << 0, /* no previous image: features detected only */
+    RP_TRACK_TOPPED_UP = 1u << 1, /* new features detected this frame */
+    RP_TRACK_ALL_LOST  = 1u << 2, /* every track from the previous frame was lost (re-detected) */
+    RP_TRACK_BLANK     = 1u << 3  /* blank frame: ignored, previous image and tracks kept */
+};
+
+typedef struct {
+    uint32_t flags;     /* RP_TRACK_* */
+    uint16_t n_prev;    /* tracks before this frame */
+    uint16_t n_tracked; /* tracks that survived */
+    uint16_t n_lost_fb; /* dropped by the forward-backward check */
+    uint16_t n_lost;    /* dropped otherwise (left the image, low texture, LK out of bounds) */
+    uint16_t n_new;     /* new features */
+} rp_track_info_t;
+
+/* One level of a pyramid inside a tracker's buffer. */
+typedef struct {
+    uint32_t off;  /* byte offset of the level in the pyramid buffer */
+    uint16_t w, h; /* pixels (level l is ceil(w_{l-1} / 2) like cv::pyrDown) */
+} rp_pyr_level_t;
+
+#define RP_TRACK_PYR_BYTES                                                                       \
+    ((RP_TRACK_MAX_W * RP_TRACK_MAX_H * 4) / 3 + 2 * (RP_TRACK_MAX_W + RP_TRACK_MAX_H) +          \
+     4 * RP_TRACK_MAX_LEVELS + 16)
+
+typedef struct {
+    uint8_t pix[RP_TRACK_PYR_BYTES];
+    rp_pyr_level_t lev[RP_TRACK_MAX_LEVELS];
+    uint8_t n_lev;
+} rp_pyr_t;
+
+typedef struct {
+    int32_t r;     /* response */
+    uint16_t x, y; /* pixel */
+} rp_track_cand_t;
+
+/* Per-camera tracker. Large (two pyramids and a response map): allocate it statically. */
+typedef struct {
+    rp_track_cfg_t cfg;
+    rp_pyr_t pyr[2];
+    uint8_t cur;      /* index of the pyramid holding the last accepted image */
+    uint8_t has_prev; /* 1 once an image was accepted */
+    int64_t utime;    /* time of the last accepted image, us */
+    uint32_t next_k;  /* next id is cfg.cam + RP_MAX_CAMS * next_k; never reused */
+    uint16_t n;       /* current tracks */
+    uint32_t id[RP_MAX_FEATS_PER_CAM];
+    int32_t pos_q16[RP_MAX_FEATS_PER_CAM][2]; /* level-0 position, Q16 px */
+    /* scratch of detection */
+    int32_t resp[RP_TRACK_MAX_W * RP_TRACK_MAX_H]; /* 2 x min eigenvalue, Sobel units^2 */
+    rp_track_cand_t cand[RP_TRACK_MAX_CELLS][RP_TRACK_CELL_CANDS];
+    uint16_t n_cand[RP_TRACK_MAX_CELLS];
+    rp_track_cand_t list[RP_TRACK_MAX_CELLS * RP_TRACK_CELL_CANDS];
+    /* scratch of tracking */
+    int32_t fwd_q16[RP_MAX_FEATS_PER_CAM][2];
+} rp_tracker_t;
+
+/* Defaults like OpenCV's: 21x21 window, 4 levels (maxLevel 3), 30 iterations, eps 0.01 px,
+ * minEigThreshold 1e-4, forward-backward 1 px, 150 features, min distance 10 px, quality 0.01,
+ * 8x6 grid, residual 20 grey levels. Returns RP_E_ARG if cfg is NULL. */
+rp_status_t rp_track_default_cfg(rp_track_cfg_t *cfg);
+
+/* Resets trk with cfg (copied). RP_E_ARG: NULL or a cfg value out of range (see rp_track_cfg_t). */
+rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg);
+
+/* Tracks the features of the previous image into img, drops the bad ones (forward-backward,
+ * texture, left the image), tops up to cfg.target, and writes at most cap features to out
+ * (*n_out of them). info (may be NULL) receives the events.
+ * Returns:
+ *   RP_OK         features in out (on RP_TRACK_ALL_LOST they are all new, re-detected)
+ *   RP_E_ARG      NULL pointer; image larger than RP_TRACK_MAX_W x H or smaller than the window
+ *                 plus its pyramid; stride < w; truncated (size too small); state untouched
+ *   RP_E_DEGENERATE blank image (contrast < cfg.min_contrast): ignored, the previous image and
+ *                 its tracks are kept and the next frame tracks from them; *n_out = 0
+ *   RP_E_TOO_FEW  image accepted, but no feature at all survived or was found (*n_out = 0)
+ *   RP_E_FULL     more features than cap: the first cap written, all kept by the tracker */
+rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t utime,
+                             rp_feat_t *out, uint16_t cap, uint16_t *n_out, rp_track_info_t *info);
+
+/* Builds a Gaussian pyramid of img ([1 4 6 4 1]/16 separable, as cv::pyrDown, borders reflected
+ * 101; sums in int32, result rounded: (sum + 128) >> 8). RP_E_ARG as rp_track_process. */
+rp_status_t rp_pyr_build(rp_pyr_t *pyr, const rp_image_t *img, uint8_t levels);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_TRACK_H */

@@ -1,0 +1,381 @@
+/* test_track.c - the image front end (rp_track.h): sub-pixel tracking of shifted synthetic
+ * textures, checkerboard corners, the forward-backward check on an occluded patch, new ids, and
+ * the status codes of bad images. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "rp_test.h"
+
+#include "rigpose/rp_track.h"
+
+#define W 320
+#define H 240
+#define NWAVE 24
+
+/* A smooth texture: a sum of plane waves (wavelengths 6..40 px), deterministic per seed. */
+typedef struct {
+    double kx[NWAVE], ky[NWAVE], ph[NWAVE], amp[NWAVE];
+} texture_t;
+
+static void texture_make(texture_t *t)
+{
+    for (int i = 0; i < NWAVE; ++i) {
+        const double lam = rp_test_urand(6.0, 40.0), th = rp_test_urand(0.0, 6.283185307);
+        t->kx[i] = 6.283185307 / lam * cos(th);
+        t->ky[i] = 6.283185307 / lam * sin(th);
+        t->ph[i] = rp_test_urand(0.0, 6.283185307);
+        t->amp[i] = rp_test_urand(0.3, 1.0);
+    }
+}
+
+static double texture_at(const texture_t *t, double x, double y)
+{
+    double s = 0, a = 0;
+    for (int i = 0; i < NWAVE; ++i) {
+        s += t->amp[i] * sin(t->kx[i] * x + t->ky[i] * y + t->ph[i]);
+        a += t->amp[i];
+    }
+    return 128.0 + 110.0 * s / sqrt(a * a / NWAVE * 2.0) * 0.8;
+}
+
+static uint8_t to_u8(double v) { return (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v + 0.5)); }
+
+/* img(u, v) = texture(u - dx, v - dy): the scene moved by (+dx, +dy). */
+static void render(const texture_t *t, double dx, double dy, uint8_t *img)
+{
+    for (int v = 0; v < H; ++v) {
+        for (int u = 0; u < W; ++u) {
+            img[v * W + u] = to_u8(texture_at(t, u - dx, v - dy));
+        }
+    }
+}
+
+static rp_image_t view(const uint8_t *p, int w, int h)
+{
+    rp_image_t im;
+    im.data = p;
+    im.w = (uint16_t)w;
+    im.h = (uint16_t)h;
+    im.stride = (uint32_t)w;
+    im.size = (uint32_t)(w * h);
+    return im;
+}
+
+static rp_tracker_t trk;
+static uint8_t img0[W * H], img1[W * H];
+static rp_feat_t f0[RP_MAX_FEATS_PER_CAM], f1[RP_MAX_FEATS_PER_CAM];
+
+static void init_default(void)
+{
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    assert_ok(rp_track_init(&trk, &cfg));
+}
+
+static const rp_feat_t *find_id(const rp_feat_t *f, int n, uint32_t id)
+{
+    for (int i = 0; i < n; ++i) {
+        if (f[i].id == id) {
+            return &f[i];
+        }
+    }
+    return NULL;
+}
+
+/* Given a texture moved by a known sub-pixel shift, then tracks follow it within 0.1 px (mean
+ * within 0.05 px) and almost all survive. */
+static void check_shift(double dx, double dy)
+{
+    texture_t t;
+    texture_make(&t);
+    render(&t, 0, 0, img0);
+    render(&t, dx, dy, img1);
+    init_default();
+    uint16_t n0 = 0, n1 = 0;
+    rp_track_info_t info;
+    rp_image_t a = view(img0, W, H), b = view(img1, W, H);
+    assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, &info));
+    assert_true(info.flags & RP_TRACK_FIRST);
+    assert_true(n0 >= 100);
+    assert_ok(rp_track_process(&trk, &b, 33000, f1, RP_MAX_FEATS_PER_CAM, &n1, &info));
+    double sum = 0, worst = 0;
+    int m = 0, n_in = 0;
+    for (int i = 0; i < n0; ++i) {
+        /* only where the window sees the same scene in both frames (border replicated) */
+        const double u = (double)f0[i].uv[0], v = (double)f0[i].uv[1];
+        const double margin = 11.0 + fmax(fabs(dx), fabs(dy)) * 1.5;
+        if (u < margin || v < margin || u > W - 1 - margin || v > H - 1 - margin) {
+            continue;
+        }
+        ++n_in;
+        const rp_feat_t *g = find_id(f1, n1, f0[i].id);
+        if (g == NULL) {
+            continue;
+        }
+        const double ex = (double)g->uv[0] - (double)f0[i].uv[0] - dx;
+        const double ey = (double)g->uv[1] - (double)f0[i].uv[1] - dy;
+        const double e = sqrt(ex * ex + ey * ey);
+        sum += e;
+        worst = e > worst ? e : worst;
+        ++m;
+    }
+    print_message("shift (%.2f, %.2f): %d of %d interior tracked, mean error %.4f px, max %.4f px\n",
+                  dx, dy, m, n_in, sum / m, worst);
+    assert_true(n_in >= 50);
+    assert_true(m >= (int)(0.9 * n_in));
+    assert_true(sum / m < 0.05);
+    assert_true(worst < 0.1);
+}
+
+static void test_subpixel_shift_small(void **s)
+{
+    (void)s;
+    check_shift(0.37, -0.61);
+}
+
+static void test_subpixel_shift_medium(void **s)
+{
+    (void)s;
+    check_shift(3.25, 1.8);
+}
+
+static void test_subpixel_shift_large(void **s)
+{
+    (void)s;
+    check_shift(-9.6, 7.3); /* needs the pyramid: beyond a 21x21 window's reach */
+}
+
+/* Given a checkerboard of 20 px squares, then the detected corners sit within 1 px of the
+ * squares' corners (x.5 between pixels) and most corners are found. */
+static void test_checkerboard_corners(void **s)
+{
+    (void)s;
+    const int sq = 20;
+    for (int v = 0; v < H; ++v) {
+        for (int u = 0; u < W; ++u) {
+            img0[v * W + u] = (uint8_t)((((u / sq) + (v / sq)) & 1) ? 200 : 50);
+        }
+    }
+    init_default();
+    rp_image_t a = view(img0, W, H);
+    uint16_t n = 0;
+    assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n, NULL));
+    const int n_corners = (W / sq - 1) * (H / sq - 1);
+    print_message("checkerboard: %d features, %d corners\n", n, n_corners);
+    assert_true(n >= (int)(0.9 * n_corners));
+    for (int i = 0; i < n; ++i) {
+        const double cu = floor((double)f0[i].uv[0] / sq + 0.5) * sq - 0.5;
+        const double cv = floor((double)f0[i].uv[1] / sq + 0.5) * sq - 0.5;
+        assert_true(fabs((double)f0[i].uv[0] - cu) <= 1.0);
+        assert_true(fabs((double)f0[i].uv[1] - cv) <= 1.0);
+        assert_true(cu > 0 && cu < W - 1 && cv > 0 && cv < H - 1);
+    }
+}
+
+/* Given a square of the scene covered by another texture in the second frame, then no track that
+ * started well inside the square survives, and tracks far from it do. */
+static void test_fb_drops_occluded(void **s)
+{
+    (void)s;
+    texture_t t, o;
+    texture_make(&t);
+    texture_make(&o);
+    render(&t, 0, 0, img0);
+    render(&t, 1.5, 0.5, img1);
+    const int x0 = 100, y0 = 60, side = 100;
+    for (int v = y0; v < y0 + side; ++v) {
+        for (int u = x0; u < x0 + side; ++u) {
+            img1[v * W + u] = to_u8(texture_at(&o, u, v));
+        }
+    }
+    init_default();
+    rp_image_t a = view(img0, W, H), b = view(img1, W, H);
+    uint16_t n0 = 0, n1 = 0;
+    rp_track_info_t info;
+    assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, NULL));
+    assert_ok(rp_track_process(&trk, &b, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, &info));
+    int inside = 0, far_total = 0, far_kept = 0;
+    for (int i = 0; i < n0; ++i) {
+        const double u = (double)f0[i].uv[0], v = (double)f0[i].uv[1];
+        const rp_feat_t *g = find_id(f1, n1, f0[i].id);
+        if (u > x0 + 12 && u < x0 + side - 12 && v > y0 + 12 && v < y0 + side - 12) {
+            ++inside;
+            if (g != NULL) {
+                print_message("  survivor %u (%.1f, %.1f) -> (%.1f, %.1f)\n", f0[i].id, u, v,
+                              (double)g->uv[0], (double)g->uv[1]);
+            }
+            assert_null(g);
+        } else if (u < x0 - 25 || u > x0 + side + 25 || v < y0 - 25 || v > y0 + side + 25) {
+            ++far_total;
+            far_kept += g != NULL;
+        }
+    }
+    print_message("occlusion: %d inside dropped, lost fb %d other %d; far kept %d of %d\n", inside,
+                  info.n_lost_fb, info.n_lost, far_kept, far_total);
+    assert_true(inside >= 5);
+    assert_true(info.n_lost_fb > 0);
+    assert_true(far_kept >= (int)(0.9 * far_total));
+}
+
+/* Given a frame of another scene, then every track is lost, reported, and new features with new
+ * ids replace them; ids are never reused. */
+static void test_all_lost_redetects_new_ids(void **s)
+{
+    (void)s;
+    texture_t t, o;
+    texture_make(&t);
+    texture_make(&o);
+    render(&t, 0, 0, img0);
+    render(&o, 0, 0, img1);
+    init_default();
+    rp_image_t a = view(img0, W, H), b = view(img1, W, H);
+    uint16_t n0 = 0, n1 = 0;
+    rp_track_info_t info;
+    assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, NULL));
+    uint32_t max0 = 0;
+    for (int i = 0; i < n0; ++i) {
+        max0 = f0[i].id > max0 ? f0[i].id : max0;
+    }
+    assert_ok(rp_track_process(&trk, &b, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, &info));
+    print_message("other scene: %d of %d survived (fb %d, other %d), %d new\n", info.n_tracked,
+                  info.n_prev, info.n_lost_fb, info.n_lost, info.n_new);
+    assert_true(info.n_tracked <= n0 / 20); /* a chance survivor or two at most */
+    assert_true(info.n_tracked > 0 || (info.flags & RP_TRACK_ALL_LOST));
+    assert_true(n1 >= 100);
+    assert_true(info.flags & RP_TRACK_TOPPED_UP);
+    for (int i = info.n_tracked; i < n1; ++i) {
+        assert_true(f1[i].id > max0);
+        assert_int_equal(f1[i].id % RP_MAX_CAMS, 0);
+    }
+    /* all lost for sure: a frame of a third, unrelated scene far off */
+    render(&t, 0, 0, img0);
+    for (int i = 0; i < W * H; ++i) {
+        img0[i] = (uint8_t)(255 - img0[i]);
+    }
+    a = view(img0, W, H);
+    assert_ok(rp_track_process(&trk, &a, 2, f0, RP_MAX_FEATS_PER_CAM, &n0, &info));
+    print_message("inverted scene: %d survived, flags 0x%x\n", info.n_tracked, info.flags);
+    assert_true(info.n_tracked == 0 ? (info.flags & RP_TRACK_ALL_LOST) != 0 : 1);
+}
+
+/* Given a blank frame between two good ones, then it is reported and skipped, and tracking goes
+ * on from the last good frame. */
+static void test_blank_frame_skipped(void **s)
+{
+    (void)s;
+    texture_t t;
+    texture_make(&t);
+    render(&t, 0, 0, img0);
+    init_default();
+    rp_image_t a = view(img0, W, H);
+    uint16_t n0 = 0, n1 = 0;
+    rp_track_info_t info;
+    assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, NULL));
+    memset(img1, 77, sizeof(img1));
+    rp_image_t b = view(img1, W, H);
+    assert_status(rp_track_process(&trk, &b, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, &info),
+                  RP_E_DEGENERATE);
+    assert_int_equal(n1, 0);
+    assert_true(info.flags & RP_TRACK_BLANK);
+    render(&t, 0.5, 0.25, img1);
+    assert_ok(rp_track_process(&trk, &b, 2, f1, RP_MAX_FEATS_PER_CAM, &n1, &info));
+    assert_true(info.n_tracked >= (int)(0.9 * n0));
+}
+
+static void test_bad_images(void **s)
+{
+    (void)s;
+    init_default();
+    uint16_t n = 0;
+    rp_image_t a = view(img0, W, H);
+    assert_status(rp_track_process(NULL, &a, 0, f0, 10, &n, NULL), RP_E_ARG);
+    assert_status(rp_track_process(&trk, NULL, 0, f0, 10, &n, NULL), RP_E_ARG);
+    assert_status(rp_track_process(&trk, &a, 0, f0, 10, NULL, NULL), RP_E_ARG);
+    assert_status(rp_track_process(&trk, &a, 0, NULL, 10, &n, NULL), RP_E_ARG);
+    rp_image_t tiny = view(img0, 16, 16); /* smaller than the 21x21 window */
+    assert_status(rp_track_process(&trk, &tiny, 0, f0, 10, &n, NULL), RP_E_ARG);
+    rp_image_t trunc = a;
+    trunc.size = W * (H - 1);
+    assert_status(rp_track_process(&trk, &trunc, 0, f0, 10, &n, NULL), RP_E_ARG);
+    rp_image_t big = a;
+    big.w = RP_TRACK_MAX_W + 1;
+    big.size = 0xffffffffu;
+    big.stride = RP_TRACK_MAX_W + 1;
+    assert_status(rp_track_process(&trk, &big, 0, f0, 10, &n, NULL), RP_E_ARG);
+    rp_image_t narrow = a;
+    narrow.stride = W - 1;
+    assert_status(rp_track_process(&trk, &narrow, 0, f0, 10, &n, NULL), RP_E_ARG);
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    cfg.win = 20;
+    assert_status(rp_track_init(&trk, &cfg), RP_E_ARG);
+    assert_status(rp_track_init(&trk, NULL), RP_E_ARG);
+    assert_status(rp_track_default_cfg(NULL), RP_E_ARG);
+}
+
+/* Given a noisy but flat-ish image (contrast above the blank limit, no structure), then no
+ * feature is found and that is reported. */
+static void test_no_texture_too_few(void **s)
+{
+    (void)s;
+    for (int i = 0; i < W * H; ++i) {
+        img0[i] = (uint8_t)(100 + (i % 7 == 0 ? 10 : 0) * ((i / W) % 2));
+    }
+    init_default();
+    rp_image_t a = view(img0, W, H);
+    uint16_t n = 0;
+    rp_status_t st = rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n, NULL);
+    print_message("weak pattern: status %s, %d features\n", rp_status_str(st), n);
+    assert_true(st == RP_OK || st == RP_E_TOO_FEW);
+    assert_true(st == RP_OK ? n > 0 : n == 0);
+}
+
+/* Given more features than the caller's buffer, then RP_E_FULL and the buffer is filled. */
+static void test_cap_full(void **s)
+{
+    (void)s;
+    texture_t t;
+    texture_make(&t);
+    render(&t, 0, 0, img0);
+    init_default();
+    rp_image_t a = view(img0, W, H);
+    uint16_t n = 0;
+    assert_status(rp_track_process(&trk, &a, 0, f0, 5, &n, NULL), RP_E_FULL);
+    assert_int_equal(n, 5);
+}
+
+/* The pyramid halves like cv::pyrDown: sizes ceil(w/2), flat stays flat. */
+static void test_pyramid(void **s)
+{
+    (void)s;
+    static rp_pyr_t pyr;
+    memset(img0, 90, sizeof(img0));
+    rp_image_t a = view(img0, 101, 75);
+    assert_ok(rp_pyr_build(&pyr, &a, 4));
+    assert_int_equal(pyr.n_lev, 4);
+    assert_int_equal(pyr.lev[1].w, 51);
+    assert_int_equal(pyr.lev[1].h, 38);
+    assert_int_equal(pyr.lev[3].w, 13);
+    assert_int_equal(pyr.lev[3].h, 10);
+    for (int i = 0; i < 13 * 10; ++i) {
+        assert_int_equal(pyr.pix[pyr.lev[3].off + i], 90);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_pyramid),
+        cmocka_unit_test(test_subpixel_shift_small),
+        cmocka_unit_test(test_subpixel_shift_medium),
+        cmocka_unit_test(test_subpixel_shift_large),
+        cmocka_unit_test(test_checkerboard_corners),
+        cmocka_unit_test(test_fb_drops_occluded),
+        cmocka_unit_test(test_all_lost_redetects_new_ids),
+        cmocka_unit_test(test_blank_frame_skipped),
+        cmocka_unit_test(test_bad_images),
+        cmocka_unit_test(test_no_texture_too_few),
+        cmocka_unit_test(test_cap_full),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
