@@ -23,6 +23,8 @@
 #include <unistd.h>
 
 #include "rigpose/rp_vo_gc.h"
+#include "rigpose/rp_rc.h"
+#include "rigpose/rp_vo_mono.h"
 #include "rigpose/rp_vo_stereo.h"
 #include "rp_sim.h"
 
@@ -141,9 +143,110 @@ static rp_status_t gc_step(void *state, const rp_frameset_t *fs, rp_estimate_t *
     return rp_vo_gc_step((rp_vo_gc_t *)state, fs, est);
 }
 
+/* cam1..cam4: one camera alone (rp_vo_mono.h), reporting its pose mapped to the rig frame.
+ * Features start on the plane z = the shell's mid depth (0.667 + 1) / 2 m. */
+static rp_vo_mono_cfg_t mono_cfg(uint8_t cam, const method_opts_t *o)
+{
+    rp_vo_mono_cfg_t cfg = rp_vo_mono_default_cfg();
+    cfg.cam = cam;
+    cfg.init_depth_m = (rp_real)((0.667 + 1.0) / 2.0);
+    cfg.init_depth_sigma_m = (rp_real)0.15;
+    cfg.ekf.sigma_px = (rp_real)(o->noise_px > 0.01 ? o->noise_px : 0.01);
+    if (o->ekf_iterations) {
+        cfg.ekf.iterations = (uint8_t)o->ekf_iterations;
+    }
+    return cfg;
+}
+
+static rp_status_t mono_init(void *state, const rp_rig_t *rig, const method_opts_t *o, uint8_t cam)
+{
+    const rp_vo_mono_cfg_t cfg = mono_cfg(cam, o);
+    return rp_vo_mono_init((rp_vo_mono_t *)state, rig, &cfg);
+}
+
+static rp_status_t cam1_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
+{
+    return mono_init(state, rig, o, RP_SIM_CAM1);
+}
+
+static rp_status_t cam2_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
+{
+    return mono_init(state, rig, o, RP_SIM_CAM2);
+}
+
+static rp_status_t cam3_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
+{
+    return mono_init(state, rig, o, RP_SIM_CAM3);
+}
+
+static rp_status_t cam4_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
+{
+    return mono_init(state, rig, o, RP_SIM_CAM4);
+}
+
+static rp_status_t mono_step(void *state, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    return rp_vo_mono_step((rp_vo_mono_t *)state, fs, est, NULL);
+}
+
+/* rc: four single cameras (their own mono estimators, duplicating cam1..cam4's work) fused by
+ * the rigidity constraints (rp_rc.h). A degenerate frame keeps the last accepted scale S_j. */
+typedef struct {
+    rp_vo_mono_t mono[4];
+    rp_rc_params_t prm;
+    rp_real last_scale;
+} rc_state_t;
+
+static rp_status_t rc_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
+{
+    rc_state_t *rc = state;
+    static const uint8_t cams[4] = {RP_SIM_CAM1, RP_SIM_CAM2, RP_SIM_CAM3, RP_SIM_CAM4};
+    for (int i = 0; i < 4; ++i) {
+        const rp_vo_mono_cfg_t cfg = mono_cfg(cams[i], o);
+        const rp_status_t st = rp_vo_mono_init(&rc->mono[i], rig, &cfg);
+        if (st != RP_OK) {
+            return st;
+        }
+    }
+    rc->prm = rp_rc_default_params();
+    rc->last_scale = (rp_real)1.0;
+    return RP_OK;
+}
+
+static rp_status_t rc_step(void *state, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    rc_state_t *rc = state;
+    static const uint8_t cams[4] = {RP_SIM_CAM1, RP_SIM_CAM2, RP_SIM_CAM3, RP_SIM_CAM4};
+    rp_real p_own[4][6];
+    rp_status_t st1 = RP_OK;
+    for (int i = 0; i < 4; ++i) {
+        rp_estimate_t rig_est, own;
+        const rp_status_t st = rp_vo_mono_step(&rc->mono[i], fs, &rig_est, &own);
+        if (i == 0) {
+            st1 = st;
+            *est = own; /* cam1's own pose is the rig pose up to scale */
+        }
+        memcpy(p_own[i], own.p, sizeof(p_own[i]));
+    }
+    rp_real s[4];
+    uint32_t flags = est->flags & ~(uint32_t)RP_EST_SCALE_WEAK;
+    const rp_status_t st = rp_rc_fuse(rc->mono[0].rig, cams, 4, (const rp_real(*)[6])p_own,
+                                      &rc->prm, rc->last_scale, est->p, s, &flags);
+    if (st == RP_OK) {
+        rc->last_scale = s[0];
+    }
+    est->flags = flags;
+    return st1;
+}
+
 static const method_t methods[] = {
     {"stereo4", "4 cameras", sizeof(rp_vo_stereo_t), stereo4_init, stereo_step},
     {"stereo2", "2 cameras", sizeof(rp_vo_stereo_t), stereo2_init, stereo_step},
+    {"cam1", "cam 1", sizeof(rp_vo_mono_t), cam1_init, mono_step},
+    {"cam2", "cam 2", sizeof(rp_vo_mono_t), cam2_init, mono_step},
+    {"cam3", "cam 3", sizeof(rp_vo_mono_t), cam3_init, mono_step},
+    {"cam4", "cam 4", sizeof(rp_vo_mono_t), cam4_init, mono_step},
+    {"rc", "RC", sizeof(rc_state_t), rc_init, rc_step},
     /* cam1..cam4 -> "cam 1".."cam 4", rc -> "RC", gc -> "2 cameras" (no paper row) */
     {"gc", "2 cameras", sizeof(rp_vo_gc_t), gc_init, gc_step},
 };

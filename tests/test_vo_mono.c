@@ -1,0 +1,295 @@
+/*
+ * test_vo_mono.c - one camera of the non-overlapping layout on its own (cam1..cam4): structure
+ * convergence, noise-free tracking up to the depth assumption's scale, noisy accuracy against
+ * the paper's rows, re-initialisation, a camera that goes dark, the mapping to the rig frame,
+ * malformed input and bad configuration.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "rp_test.h"
+#include "rigpose/rp_rot.h"
+#include "rigpose/rp_vo_mono.h"
+#include "rp_sim.h"
+
+#define MID_DEPTH ((0.667 + 1.0) / 2.0)
+
+typedef struct {
+    rp_sim_run_t sr;
+    rp_frameset_t fs;
+    rp_vo_mono_t vo;
+    rp_estimate_t est, own;
+} fixture_t;
+
+static fixture_t *fixture(double noise_px, uint32_t frames, uint32_t run)
+{
+    fixture_t *fx = calloc(1, sizeof(*fx));
+    rp_sim_cfg_t cfg;
+    rp_sim_default_cfg(&cfg);
+    cfg.noise_px = noise_px;
+    cfg.n_frames = frames;
+    assert_int_equal(rp_sim_run_init(&fx->sr, &cfg, 11, run), 0);
+    return fx;
+}
+
+static void fixture_free(fixture_t *fx)
+{
+    rp_sim_run_free(&fx->sr);
+    free(fx);
+}
+
+static rp_vo_mono_cfg_t mono_cfg(uint8_t cam, double noise_px)
+{
+    rp_vo_mono_cfg_t c = rp_vo_mono_default_cfg();
+    c.cam = cam;
+    c.init_depth_m = (rp_real)MID_DEPTH;
+    c.init_depth_sigma_m = RP_C(0.15);
+    c.ekf.sigma_px = noise_px > 0 ? (rp_real)noise_px : RP_C(0.01);
+    return c;
+}
+
+typedef void (*mutate_fn)(rp_frameset_t *fs, uint32_t j);
+
+/* Mean absolute error over frames 1.. of the rig pose (est), into err[6]. Returns lost frames. */
+static uint32_t run_sequence(fixture_t *fx, const rp_vo_mono_cfg_t *cfg, uint32_t frames,
+                             mutate_fn mutate, double err[6], uint32_t *flags_or)
+{
+    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sr.rig, cfg));
+    memset(err, 0, 6 * sizeof(double));
+    uint32_t lost = 0;
+    *flags_or = 0;
+    for (uint32_t j = 0; j < frames; ++j) {
+        rp_sim_frame(&fx->sr, j, &fx->fs);
+        if (mutate) mutate(&fx->fs, j);
+        rp_status_t st = rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, &fx->own);
+        if (st != RP_OK) lost++;
+        *flags_or |= fx->est.flags;
+        for (int i = 0; i < 6; ++i) assert_true(isfinite((double)fx->est.p[i]));
+        if (j == 0) {
+            assert_true(fx->est.flags & RP_EST_INITIALISING);
+            continue;
+        }
+        for (int i = 0; i < 6; ++i) {
+            double d = (double)fx->est.p[i] - fx->sr.truth[j * 6 + i];
+            if (i >= 3) d = (double)rp_angle_wrap((rp_real)d);
+            err[i] += fabs(d) / (double)(frames - 1);
+        }
+    }
+    return lost;
+}
+
+/* Mean distance of cam1's landmarks (world = cam1's first frame) from the true points. */
+static double structure_error(const rp_vo_mono_t *vo, const rp_sim_run_t *sr, uint32_t *count)
+{
+    double sum = 0;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < RP_MAX_LANDMARKS; ++i) {
+        const rp_mono_landmark_t *l = &vo->lm[i];
+        if (l->id == RP_VO_MONO_EMPTY_ID) continue;
+        const double *t = &sr->points[3u * l->id];
+        double d2 = 0;
+        for (int c = 0; c < 3; ++c) {
+            double d = (double)l->pt.M[c] - t[c];
+            d2 += d * d;
+        }
+        sum += sqrt(d2);
+        n++;
+    }
+    *count = n;
+    return n ? sum / n : 0.0;
+}
+
+static void test_structure_converges_within_a_run(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.5, 40, 0);
+    rp_vo_mono_cfg_t cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg));
+    double e0 = 0, e1 = 0;
+    uint32_t n0 = 0, n1 = 0;
+    for (uint32_t j = 0; j < 25; ++j) {
+        rp_sim_frame(&fx->sr, j, &fx->fs);
+        rp_status_t st = rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, NULL);
+        assert_true(st == RP_OK);
+        if (j == 0) e0 = structure_error(&fx->vo, &fx->sr, &n0);
+    }
+    e1 = structure_error(&fx->vo, &fx->sr, &n1);
+    print_message("structure error: %.4f m (%u points, orthographic) -> %.4f m (%u points)\n",
+                  e0, n0, e1, n1);
+    assert_true(n0 >= 50 && n1 >= 50);
+    assert_true(e0 > 0.02);       /* the depth assumption is off by up to 0.17 m */
+    assert_true(e1 < 0.6 * e0);   /* the structure EKFs pull it towards the truth */
+    fixture_free(fx);
+}
+
+static void test_noise_free_run_follows_truth_up_to_depth_scale(void **state)
+{
+    (void)state;
+    for (uint8_t cam = RP_SIM_CAM1; cam <= RP_SIM_CAM4; ++cam) {
+        fixture_t *fx = fixture(0.0, 40, 1);
+        rp_vo_mono_cfg_t cfg = mono_cfg(cam, 0.0);
+        double err[6];
+        uint32_t flags;
+        assert_int_equal(run_sequence(fx, &cfg, 40, NULL, err, &flags), 0);
+        print_message("cam%u noise-free: tx %.2e ty %.2e tz %.2e a %.2e b %.2e g %.2e\n",
+                      cam + 1u, err[0], err[1], err[2], err[3], err[4], err[5]);
+        assert_true(flags & RP_EST_SCALE_WEAK);
+        /* Without noise the errors are the depth assumption's alone: the translation is right
+         * up to its scale (the error stays a tenth of the ~0.3 m travelled over 40 frames) and
+         * the rotation is off only through the rotation/translation coupling of one camera
+         * (largest for the sideways cameras). */
+        for (int i = 0; i < 6; ++i) assert_true(err[i] < 0.03);
+        fixture_free(fx);
+    }
+}
+
+static void test_noisy_runs_beat_the_papers_single_camera_rows(void **state)
+{
+    (void)state;
+    static const double paper[4][6] = {
+        {.0252, .0206, .0337, .0204, .0260, .0040},
+        {.2973, .3731, .3828, .0864, .2724, .2791},
+        {.0238, .0211, .0390, .0203, .0249, .0045},
+        {.2846, .3740, .3770, .0879, .2750, .2825},
+    };
+    for (uint8_t cam = RP_SIM_CAM1; cam <= RP_SIM_CAM4; ++cam) {
+        double mean[6] = {0};
+        const int runs = 3;
+        for (int r = 0; r < runs; ++r) {
+            fixture_t *fx = fixture(0.5, 100, (uint32_t)r);
+            rp_vo_mono_cfg_t cfg = mono_cfg(cam, 0.5);
+            double err[6];
+            uint32_t flags;
+            assert_int_equal(run_sequence(fx, &cfg, 100, NULL, err, &flags), 0);
+            for (int i = 0; i < 6; ++i) mean[i] += err[i] / runs;
+            fixture_free(fx);
+        }
+        print_message("cam%u over %d runs: tx %.2e ty %.2e tz %.2e a %.2e b %.2e g %.2e\n",
+                      cam + 1u, runs, mean[0], mean[1], mean[2], mean[3], mean[4], mean[5]);
+        for (int i = 0; i < 6; ++i) assert_true(mean[i] <= paper[cam][i]);
+    }
+}
+
+static void test_reinitialisation_backtracks_and_keeps_accuracy(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.5, 60, 1);
+    rp_vo_mono_cfg_t cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    cfg.min_tracked = 200; /* force frequent re-initialisations */
+    double err[6];
+    uint32_t flags;
+    assert_int_equal(run_sequence(fx, &cfg, 60, NULL, err, &flags), 0);
+    assert_true(flags & RP_EST_REINIT);
+    for (int i = 0; i < 6; ++i) assert_true(err[i] < 0.03);
+    fixture_free(fx);
+}
+
+/* Camera 3 delivers nothing for frames 10-12. */
+static void cam3_dark(rp_frameset_t *fs, uint32_t j)
+{
+    if (j >= 10 && j <= 12) fs->n[RP_SIM_CAM3] = 0;
+}
+
+static void test_dark_camera_reports_lost_then_recovers(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.5, 40, 3);
+    rp_vo_mono_cfg_t cfg = mono_cfg(RP_SIM_CAM3, 0.5);
+    double err[6];
+    uint32_t flags;
+    uint32_t lost = run_sequence(fx, &cfg, 40, cam3_dark, err, &flags);
+    assert_true(lost >= 3 && lost <= 5);
+    assert_true(flags & RP_EST_LOST);
+    assert_true(flags & RP_EST_REINIT);
+    assert_true(fx->est.flags & RP_EST_TRACKING);
+    for (int i = 0; i < 3; ++i) {
+        assert_true(fabs((double)fx->est.p[i] - fx->sr.truth[39 * 6 + i]) < 0.15);
+    }
+    fixture_free(fx);
+}
+
+static void test_own_pose_maps_to_the_rig_pose_exactly(void **state)
+{
+    (void)state;
+    rp_sim_cfg_t scfg;
+    rp_sim_default_cfg(&scfg);
+    rp_rig_t rig;
+    rp_sim_make_rig(&scfg, &rig);
+    const rp_real p[6] = {RP_C(0.1), RP_C(-0.05), RP_C(0.2), RP_C(0.1), RP_C(-0.2), RP_C(0.3)};
+    rp_real Rj[9];
+    rp_rot_from_angles(&p[3], Rj);
+    for (uint8_t k = 0; k < 4; ++k) {
+        /* camera k's own pose: r = R_k^T R_j R_k, l = R_k^T (d_j + R_j D_k - D_k) */
+        const rp_real *Rk = rig.cam[k].R, *Dk = rig.cam[k].D;
+        rp_real r[9], t[3], own[6], back[6];
+        rp_rot_mul_at_b(Rk, Rj, r);
+        rp_rot_mul(r, Rk, r);
+        rp_rot_apply(Rj, Dk, t);
+        for (int c = 0; c < 3; ++c) t[c] += p[c] - Dk[c];
+        rp_rot_apply_t(Rk, t, own);
+        assert_ok(rp_rot_to_angles(r, &own[3]));
+        assert_ok(rp_vo_mono_to_rig(&rig, k, own, back));
+        for (int i = 0; i < 6; ++i) assert_near(back[i], p[i], RP_TOL(1e-12, 1e-5));
+    }
+    rp_real bad[6] = {0, 0, 0, 0, 0, (rp_real)NAN}, out[6];
+    assert_status(rp_vo_mono_to_rig(&rig, 0, bad, out), RP_E_NAN);
+    assert_status(rp_vo_mono_to_rig(&rig, 9, p, out), RP_E_ARG);
+}
+
+static void test_malformed_frameset_is_rejected_without_damage(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.5, 10, 5);
+    rp_vo_mono_cfg_t cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg));
+    rp_sim_frame(&fx->sr, 0, &fx->fs);
+    assert_ok(rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, NULL));
+    rp_sim_frame(&fx->sr, 1, &fx->fs);
+    fx->fs.n[RP_SIM_CAM1] = RP_MAX_FEATS_PER_CAM + 1;
+    assert_status(rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, NULL), RP_E_ARG);
+    assert_true(fx->est.flags & RP_EST_LOST);
+    assert_status(rp_vo_mono_step(&fx->vo, NULL, &fx->est, NULL), RP_E_ARG);
+    rp_sim_frame(&fx->sr, 1, &fx->fs);
+    assert_ok(rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, NULL));
+    assert_true(fx->est.flags & RP_EST_TRACKING);
+    fixture_free(fx);
+}
+
+static void test_bad_configuration_is_refused(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.5, 2, 0);
+    rp_vo_mono_cfg_t cfg = mono_cfg(9, 0.5); /* no such camera */
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    cfg.init_depth_m = 0;
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    cfg.init_depth_sigma_m = -1;
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    cfg.min_tracked = 2;
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    cfg.ekf.sigma_px = -1;
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    assert_status(rp_vo_mono_init(NULL, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_mono_init(&fx->vo, NULL, &cfg), RP_E_ARG);
+    fixture_free(fx);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_structure_converges_within_a_run),
+        cmocka_unit_test(test_noise_free_run_follows_truth_up_to_depth_scale),
+        cmocka_unit_test(test_noisy_runs_beat_the_papers_single_camera_rows),
+        cmocka_unit_test(test_reinitialisation_backtracks_and_keeps_accuracy),
+        cmocka_unit_test(test_dark_camera_reports_lost_then_recovers),
+        cmocka_unit_test(test_own_pose_maps_to_the_rig_pose_exactly),
+        cmocka_unit_test(test_malformed_frameset_is_rejected_without_damage),
+        cmocka_unit_test(test_bad_configuration_is_refused),
+    };
+    return cmocka_run_group_tests_name("vo_mono", tests, NULL, NULL);
+}
