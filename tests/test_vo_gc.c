@@ -63,6 +63,7 @@ typedef struct {
     uint32_t in3;       /* scored frames with every pose column within 3 sigma */
     uint32_t in3_col[6];/* per column */
     double nees_sum;    /* sum of e^T P^-1 e over scored frames */
+    uint32_t nees_in;   /* scored frames with e^T P^-1 e within the 6-dof 99.73 % bound */
     uint32_t scored;
 } outcome_t;
 
@@ -115,6 +116,7 @@ static void run_sequence(fixture_t *fx, const rp_vo_gc_cfg_t *cfg, uint32_t fram
         double q = nees6(e, fx->est.cov);
         assert_true(q >= 0.0);
         out->nees_sum += q;
+        out->nees_in += q <= 20.06; /* chi-square, 6 dof, 99.73 % (the 3-sigma mass) */
         out->scored++;
     }
 }
@@ -164,7 +166,7 @@ static void test_pose_covariance_is_consistent(void **state)
     (void)state;
     /* Every pose column within 3 sigma of the truth in most frames, and the NEES of the
      * 6-dof pose in a sane range (6 when perfectly consistent). */
-    uint32_t in3 = 0, scored = 0, in3_col[6] = {0};
+    uint32_t in3 = 0, scored = 0, in3_col[6] = {0}, nees_in = 0;
     double nees = 0.0;
     const int runs = 4;
     for (int r = 0; r < runs; ++r) {
@@ -175,16 +177,21 @@ static void test_pose_covariance_is_consistent(void **state)
         in3 += o.in3;
         scored += o.scored;
         nees += o.nees_sum;
+        nees_in += o.nees_in;
         for (int i = 0; i < 6; ++i) in3_col[i] += o.in3_col[i];
         fixture_free(fx);
     }
     const double frac = (double)in3 / scored;
     print_message("gc consistency: all six within 3 sigma in %.1f%% of %u frames; per column "
-                  "%.0f %.0f %.0f %.0f %.0f %.0f %%; mean NEES %.1f (6 = consistent)\n",
+                  "%.0f %.0f %.0f %.0f %.0f %.0f %%; mean NEES %.1f (6 = consistent), "
+                  "NEES within chi2(6) 99.73 %% bound in %.1f%% of frames\n",
                   100.0 * frac, scored, 100.0 * in3_col[0] / scored, 100.0 * in3_col[1] / scored,
                   100.0 * in3_col[2] / scored, 100.0 * in3_col[3] / scored,
-                  100.0 * in3_col[4] / scored, 100.0 * in3_col[5] / scored, nees / scored);
+                  100.0 * in3_col[4] / scored, 100.0 * in3_col[5] / scored, nees / scored,
+                  100.0 * nees_in / scored);
     assert_true(frac >= 0.90);
+    assert_true((double)nees_in / scored >= 0.90);
+    assert_true(nees / scored < 20.0);
 }
 
 static void test_top_up_adds_features_and_keeps_accuracy(void **state)

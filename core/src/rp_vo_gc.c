@@ -21,12 +21,13 @@ rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void)
     c.min_tracked = 50;
     c.init_depth_m = RP_C(1.0);
     c.init_depth_sigma_m = RP_C(0.3);
-    c.mature_frac = RP_C(0.05);
+    c.mature_frac = RP_C(0.02);
     c.min_mature = 50;
     c.default_dt_s = RP_C(1.0) / RP_C(30.0);
     c.max_eff_obs = RP_C(0.0);
-    c.scale_sigma = RP_C(0.03);
-    c.rot_drift_sigma = RP_C(3e-4);
+    c.scale_sigma = RP_C(0.02);
+    c.trans_drift_sigma = RP_C(4e-5);
+    c.rot_drift_sigma = RP_C(1e-4);
     return c;
 }
 
@@ -146,7 +147,8 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
         return st;
     }
     if (!rp_finite(cfg->max_eff_obs) || !rp_finite(cfg->scale_sigma) ||
-        cfg->scale_sigma < RP_C(0.0) || !rp_finite(cfg->rot_drift_sigma) ||
+        cfg->scale_sigma < RP_C(0.0) || !rp_finite(cfg->trans_drift_sigma) ||
+        cfg->trans_drift_sigma < RP_C(0.0) || !rp_finite(cfg->rot_drift_sigma) ||
         cfg->rot_drift_sigma < RP_C(0.0)) {
         return RP_E_ARG;
     }
@@ -413,8 +415,11 @@ static void fill_estimate(const rp_vo_gc_t *vo, const rp_frameset_t *fs, uint32_
         }
     }
     const rp_real r2 = vo->cfg.rot_drift_sigma * vo->cfg.rot_drift_sigma * (rp_real)vo->frame;
-    for (int i = 3; i < 6; ++i) {
-        est->cov[i * 6 + i] += r2;
+    const rp_real t2 =
+        vo->cfg.trans_drift_sigma * vo->cfg.trans_drift_sigma * (rp_real)vo->frame;
+    for (int i = 0; i < 3; ++i) {
+        est->cov[i * 6 + i] += t2;
+        est->cov[(3 + i) * 6 + 3 + i] += r2;
     }
     est->flags = flags;
     est->n_landmarks = vo->n_lm;

@@ -30,6 +30,12 @@
  *     pose (no backtracking is needed: the new landmarks' depths are unknown anyway, and they
  *     enter the pose update only once converged). The across-ray covariance of a topped-up
  *     landmark includes the pose uncertainty.
+ *  5. Reported covariance. The pose EKF treats the landmarks' errors as independent, but they
+ *     are not (every landmark was placed from estimated poses and one assumed depth), so its
+ *     own covariance is far too small (NEES ~1e4 in the simulation). The estimate's covariance
+ *     is the filter's plus the map's correlated errors as "consider" terms: scale_sigma^2 t t^T
+ *     for the metric scale, and position / orientation drift growing with the frame count.
+ *     These are calibrated on the paper's simulation (tests/test_vo_gc.c checks them).
  * Output: an rp_estimate_t, the pose of cam1 in the world (rp_frame.h).
  */
 #ifndef RP_VO_GC_H
@@ -68,12 +74,17 @@ typedef struct {
     rp_real scale_sigma;          /* relative standard deviation of the map's metric scale: adds
                                    * scale_sigma^2 t t^T (t: translation since frame 0) to the
                                    * reported translation covariance (not to the filter's) */
+    rp_real trans_drift_sigma;    /* position drift of the map, m per sqrt(frame): adds
+                                   * trans_drift_sigma^2 * frame to the reported variance of each
+                                   * translation (not to the filter's) */
     rp_real rot_drift_sigma;      /* orientation drift of the map, rad per sqrt(frame): adds
                                    * rot_drift_sigma^2 * frame to the reported variance of each
                                    * angle (not to the filter's) */
 } rp_vo_gc_cfg_t;
 
-/* Defaults: the paper's threshold of 50, depth 1 m +- 0.3 m, mature at 5 %, 1/30 s. */
+/* Defaults: the paper's threshold of 50, plane at 1 m +- 0.3 m, mature at 2 % of the range
+ * (at least 50 mature landmarks, else all enter), no information cap, reported scale sigma 2 %,
+ * position drift 4e-5 m and orientation drift 1e-4 rad per sqrt(frame), 1/30 s. */
 rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void);
 
 typedef struct {
