@@ -147,7 +147,7 @@ rp_status_t rp_track_default_cfg(rp_track_cfg_t *cfg)
     cfg->min_eig = 105;
     cfg->fb_max_q16 = Q16;
     cfg->target = RP_MAX_FEATS_PER_CAM < 150 ? RP_MAX_FEATS_PER_CAM : 150;
-    cfg->topup_below = cfg->target;
+    cfg->topup_below = (uint16_t)(cfg->target * 4 / 5);
     cfg->min_dist = 10;
     cfg->quality_q16 = 655;
     cfg->min_response = 2000;
@@ -252,15 +252,25 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
         /* Patch of I and its Scharr gradients ([3 10 3]^T x [-1 0 1], |.| <= 16 * 255 = 4080)
          * on the (win+1)^2 integer grid (border replicated), then interpolated. */
         const int gw = win + 1;
+        const int in_I = ix >= 1 && iy >= 1 && ix + gw < wI && iy + gw < hI; /* no clamping */
         for (int y = 0; y < gw; ++y) {
             for (int x = 0; x < gw; ++x) {
                 const int X = ix + x, Y = iy + y;
-                const int a0 = px_at(I, wI, hI, X - 1, Y - 1), a1 = px_at(I, wI, hI, X, Y - 1);
-                const int a2 = px_at(I, wI, hI, X + 1, Y - 1), b0 = px_at(I, wI, hI, X - 1, Y);
-                const int b2 = px_at(I, wI, hI, X + 1, Y), c0 = px_at(I, wI, hI, X - 1, Y + 1);
-                const int c1 = px_at(I, wI, hI, X, Y + 1), c2 = px_at(I, wI, hI, X + 1, Y + 1);
+                int a0, a1, a2, b0, b1, b2, c0, c1, c2;
+                if (in_I) {
+                    const uint8_t *q = I + (size_t)Y * wI + X;
+                    a0 = q[-wI - 1]; a1 = q[-wI]; a2 = q[-wI + 1];
+                    b0 = q[-1]; b1 = q[0]; b2 = q[1];
+                    c0 = q[wI - 1]; c1 = q[wI]; c2 = q[wI + 1];
+                } else {
+                    a0 = px_at(I, wI, hI, X - 1, Y - 1); a1 = px_at(I, wI, hI, X, Y - 1);
+                    a2 = px_at(I, wI, hI, X + 1, Y - 1); b0 = px_at(I, wI, hI, X - 1, Y);
+                    b1 = px_at(I, wI, hI, X, Y); b2 = px_at(I, wI, hI, X + 1, Y);
+                    c0 = px_at(I, wI, hI, X - 1, Y + 1); c1 = px_at(I, wI, hI, X, Y + 1);
+                    c2 = px_at(I, wI, hI, X + 1, Y + 1);
+                }
                 const int k = y * gw + x;
-                Gg[k] = (int16_t)px_at(I, wI, hI, X, Y);
+                Gg[k] = (int16_t)b1;
                 Gx[k] = (int16_t)(3 * (a2 - a0) + 10 * (b2 - b0) + 3 * (c2 - c0));
                 Gy[k] = (int16_t)(3 * (c0 - a0) + 10 * (c1 - a1) + 3 * (c2 - a2));
             }
@@ -387,32 +397,52 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
 /* Shi-Tomasi response 2 x min eigenvalue of the 3x3-block structure tensor of 3x3 Sobel
  * gradients (as cv::cornerMinEigenVal, blockSize 3, up to its positive scale), Sobel |.| <= 1020,
  * tensor entries <= 9 * 1020^2 < 2^24 (int32), response in int32. Pixels within 2 of the border
- * get 0. Returns the largest response. */
+ * get 0, and so do pixels whose bound 2 min(a, c) is under cfg.min_response (no square root
+ * spent on flat areas). Streams the gradient products through a 3-row ring. Returns the largest
+ * response. */
 static int32_t response_map(rp_tracker_t *trk, const uint8_t *p, int w, int h)
 {
     int32_t *R = trk->resp;
     int32_t best = 0;
+    const int32_t floor_r = (int32_t)trk->cfg.min_response;
     memset(R, 0, sizeof(int32_t) * (size_t)w * h);
-    for (int y = 2; y < h - 2; ++y) {
+    for (int y = 1; y < h - 1; ++y) {
+        /* products of row y into ring slot y % 3 */
+        int32_t *xx = trk->ring[y % 3][0], *xy = trk->ring[y % 3][1], *yy = trk->ring[y % 3][2];
+        const uint8_t *r0 = p + (size_t)(y - 1) * w, *r1 = r0 + w, *r2 = r1 + w;
+        for (int x = 1; x < w - 1; ++x) {
+            const int gx = (r0[x + 1] - r0[x - 1]) + 2 * (r1[x + 1] - r1[x - 1]) +
+                           (r2[x + 1] - r2[x - 1]);
+            const int gy = (r2[x - 1] - r0[x - 1]) + 2 * (r2[x] - r0[x]) + (r2[x + 1] - r0[x + 1]);
+            xx[x] = gx * gx;
+            xy[x] = gx * gy;
+            yy[x] = gy * gy;
+        }
+        if (y < 3) {
+            continue;
+        }
+        const int yc = y - 1; /* block rows yc-1 .. yc+1 are in the ring now */
+        if (yc >= h - 2) {
+            break;
+        }
+        const int32_t(*ra)[RP_TRACK_MAX_W] = trk->ring[(yc - 1) % 3];
+        const int32_t(*rb)[RP_TRACK_MAX_W] = trk->ring[yc % 3];
+        const int32_t(*rc)[RP_TRACK_MAX_W] = trk->ring[(yc + 1) % 3];
+        int32_t *Rrow = R + (size_t)yc * w;
         for (int x = 2; x < w - 2; ++x) {
             int32_t sxx = 0, sxy = 0, syy = 0;
-            for (int j = -1; j <= 1; ++j) {
-                const uint8_t *r0 = p + (size_t)(y + j - 1) * w + x;
-                const uint8_t *r1 = r0 + w, *r2 = r1 + w;
-                for (int i = -1; i <= 1; ++i) {
-                    const int gx = (r0[i + 1] - r0[i - 1]) + 2 * (r1[i + 1] - r1[i - 1]) +
-                                   (r2[i + 1] - r2[i - 1]);
-                    const int gy = (r2[i - 1] - r0[i - 1]) + 2 * (r2[i] - r0[i]) +
-                                   (r2[i + 1] - r0[i + 1]);
-                    sxx += gx * gx;
-                    sxy += gx * gy;
-                    syy += gy * gy;
-                }
+            for (int i = x - 1; i <= x + 1; ++i) {
+                sxx += ra[0][i] + rb[0][i] + rc[0][i];
+                sxy += ra[1][i] + rb[1][i] + rc[1][i];
+                syy += ra[2][i] + rb[2][i] + rc[2][i];
+            }
+            if (2 * (sxx < syy ? sxx : syy) < floor_r) {
+                continue;
             }
             const int64_t d = (int64_t)(sxx - syy);
             const int64_t disc = d * d + 4 * (int64_t)sxy * sxy;
             const int32_t r = (int32_t)((int64_t)sxx + syy - (int64_t)isqrt64((uint64_t)disc));
-            R[(size_t)y * w + x] = r;
+            Rrow[x] = r;
             if (r > best) {
                 best = r;
             }

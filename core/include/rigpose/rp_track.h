@@ -42,7 +42,7 @@ typedef struct {
                           * 105 = its default 1e-4) */
     uint32_t fb_max_q16; /* forward-backward tolerance, Q16 px (1 px = 65536); 0 = no check */
     uint16_t target;     /* features wanted (150) */
-    uint16_t topup_below; /* detect again when fewer tracks than this survive (target) */
+    uint16_t topup_below; /* detect again when fewer tracks than this survive (0.8 target) */
     uint16_t min_dist;   /* smallest distance between features, px (10) */
     uint16_t quality_q16; /* corner response relative to the frame's best, Q16 (0.01 = 655) */
     uint32_t min_response; /* absolute floor on 2x the min eigenvalue of the 3x3 Sobel
@@ -105,6 +105,7 @@ typedef struct {
     int32_t pos_q16[RP_MAX_FEATS_PER_CAM][2]; /* level-0 position, Q16 px */
     /* scratch of detection */
     int32_t resp[RP_TRACK_MAX_W * RP_TRACK_MAX_H]; /* 2 x min eigenvalue, Sobel units^2 */
+    int32_t ring[3][3][RP_TRACK_MAX_W]; /* Sobel products gx^2, gx gy, gy^2 of 3 rows */
     rp_track_cand_t cand[RP_TRACK_MAX_CELLS][RP_TRACK_CELL_CANDS];
     uint16_t n_cand[RP_TRACK_MAX_CELLS];
     rp_track_cand_t list[RP_TRACK_MAX_CELLS * RP_TRACK_CELL_CANDS];
