@@ -46,11 +46,12 @@ VDEF_float-eigen  := -DRP_REAL_IS_FLOAT=1 -DRP_LINALG_EIGEN=1
 VDEF_double-c     := -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EIGEN=0
 VDEF_float-c      := -DRP_REAL_IS_FLOAT=1 -DRP_LINALG_EIGEN=0
 
-.PHONY: all deps deps-cross run test test-arm cross bench clean tools check-nomalloc
+.PHONY: all deps deps-cross run test test-arm cross bench clean tools check-nomalloc FORCE
 all: deps tools
 
+# `deps` covers the host build and the Python side (.venv/ with PyPI's lcm and evo).
 deps:
-	@scripts/install-deps.sh host
+	@scripts/install-deps.sh py
 deps-cross:
 	@scripts/install-deps.sh cross
 
@@ -128,15 +129,30 @@ cross: deps-cross $(ARM)/float/librigpose_core.a $(ARM)/double/librigpose_core.a
 	@$(CROSS_PREFIX)size -t $(ARM)/float/librigpose_core.a | tail -1
 
 test-arm: deps-cross $(ARM_TEST_BINS)
-	@QEMU_LD_PREFIX=/usr/aarch64-linux-gnu RP_TEST_RUNNER=qemu-aarch64 tests/run_tests.sh $(ARM_TEST_BINS)
+	@QEMU_LD_PREFIX=/usr/aarch64-linux-gnu RP_TEST_RUNNER=qemu-aarch64 tests/run_tests.sh $(ARM_TEST_BINS) $(ARM_EXTRA_TESTS)
 
-# ---- benchmarks ------------------------------------------------------------------------------
--include host_tools/bench/bench.mk
-
-# ---- extra test rules: each tests/*.mk builds its binaries (e.g. C++ tests with an OpenCV
-# oracle), appends them to HOST_EXTRA_TESTS (run by `make test`) and adds `test: <binaries>`.
+# ---- parts in their own makefiles -------------------------------------------------------------
+# Each folder that builds something beyond the core keeps a *.mk here (host_tools/<tool>/*.mk,
+# platform/*.mk, lcm_types/*.mk, daemon/*.mk, tests/*.mk). A part may
+#   - add host programs to EXTRA_TOOLS (built by `make`),
+#   - add test programs to HOST_EXTRA_TESTS and `test: <programs>` (run by `make test`),
+#   - add ARM test programs to ARM_EXTRA_TESTS and `test-arm: <programs>`,
+#   - add benchmark sections to BENCH_PARTS: each is a file $(BUILD)/bench/<name>.json holding
+#     one flat JSON object of figures, made by a rule that depends on FORCE (so it always runs)
+#     and prints its own table; `make bench` merges them all into $(BUILD)/bench.json.
+PY := .venv/bin/python
+EXTRA_TOOLS :=
 HOST_EXTRA_TESTS :=
--include $(sort $(wildcard tests/*.mk))
+ARM_EXTRA_TESTS :=
+BENCH_PARTS :=
+-include $(sort $(wildcard host_tools/*/*.mk platform/*.mk lcm_types/*.mk daemon/*.mk tests/*.mk))
+
+tools: $(EXTRA_TOOLS)
+
+bench: deps $(BENCH_PARTS)
+	@$(PY) host_tools/bench/merge_json.py $(BUILD)/bench.json $(BENCH_PARTS)
+
+FORCE:
 
 clean:
 	rm -rf $(BUILD)

@@ -1,0 +1,117 @@
+/*
+ * rp_hal.h - the platform HAL: one camera-source interface (open, start, grab a synchronised
+ * frame set, stop, close) with three sources, plus clock and sleep.
+ *
+ *   v4l2    Linux video devices (platform/src/rp_hal_v4l2.c): format negotiation, GREY / YUYV /
+ *           MJPEG to 8-bit grey, mmap streaming of all devices, kernel timestamps, grouping by
+ *           timestamp within a tolerance, drop detection, vanished / stalled devices retried.
+ *   replay  image sequences with timestamps (platform/src/rp_hal_replay.c): rigpose-render output
+ *           and the real data in ../shared/data/.
+ *   sim     the simulated rig (platform/src/rp_hal_sim.c): the feature-level simulation of
+ *           rigpose-sim, so the daemon runs with no hardware; delivers features and the truth.
+ *
+ * Not core code: sources may use the OS (open, ioctl, mmap, files) but keep their buffers in the
+ * source object or in fixed-size arrays; grab never blocks longer than cfg.timeout_ms.
+ * Every function returns an rp_hal_status_t the caller can act on.
+ */
+#ifndef RP_HAL_H
+#define RP_HAL_H
+
+#include <stdint.h>
+
+#include "rigpose/rp_frame.h"
+#include "rigpose/rp_opts.h"
+#include "rigpose/rp_track.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+    RP_HAL_OK = 0,
+    RP_HAL_E_ARG,       /* bad argument or configuration */
+    RP_HAL_E_OPEN,      /* a device or file could not be opened */
+    RP_HAL_E_FORMAT,    /* no usable pixel format / size, or a malformed image file */
+    RP_HAL_E_IO,        /* an ioctl / read failed */
+    RP_HAL_E_TIMEOUT,   /* no complete set within timeout_ms (some cameras may still be in it) */
+    RP_HAL_E_END,       /* replay / sim: no more frames */
+    RP_HAL_E_STATE      /* call out of order (grab before start, ...) */
+} rp_hal_status_t;
+
+const char *rp_hal_status_str(rp_hal_status_t s);
+
+typedef enum { RP_HAL_SRC_V4L2 = 0, RP_HAL_SRC_REPLAY, RP_HAL_SRC_SIM } rp_hal_kind_t;
+
+#define RP_HAL_PATH_MAX 256
+
+/* One camera of the source. */
+typedef struct {
+    char device[RP_HAL_PATH_MAX]; /* v4l2: /dev/videoN; replay: folder of this camera's images */
+    uint16_t w, h;                /* wanted size, px (v4l2 negotiates; replay checks) */
+    uint16_t fps;                 /* wanted rate (v4l2) */
+} rp_hal_cam_cfg_t;
+
+typedef struct {
+    rp_hal_kind_t kind;
+    uint8_t n_cams;                      /* 1..RP_MAX_CAMS */
+    rp_hal_cam_cfg_t cam[RP_MAX_CAMS];
+    int64_t sync_tol_us;                 /* v4l2: frames within this of the set time group */
+    uint32_t timeout_ms;                 /* grab gives up after this */
+    uint32_t retry_ms;                   /* v4l2: reopen a vanished device this often */
+    char replay_index[RP_HAL_PATH_MAX];  /* replay: timestamps file (format: rp_hal_replay.c) */
+    uint32_t sim_seed;                   /* sim: run seed (Table 1 protocol) */
+    uint32_t sim_frames;                 /* sim: frames in the run (0 = the protocol's 100) */
+    uint8_t sim_layout;                  /* sim: 0 = both stereo pairs (4 cams), 1 = four singles */
+    uint8_t realtime;                    /* replay / sim: pace sets at their timestamps */
+} rp_hal_cfg_t;
+
+/* Per-camera state in one set. */
+enum {
+    RP_HAL_CAM_OK      = 0,
+    RP_HAL_CAM_MISSING = 1u << 0, /* no frame in this set (stalled, vanished, out of tolerance) */
+    RP_HAL_CAM_GONE    = 1u << 1, /* device vanished; being retried every retry_ms */
+    RP_HAL_CAM_DROPPED = 1u << 2  /* the driver's sequence skipped frames before this one */
+};
+
+typedef struct {
+    rp_image_t img;    /* 8-bit grey, valid until the next grab (img.data NULL if missing) */
+    int64_t utime;     /* capture time, microseconds, CLOCK_MONOTONIC (v4l2: kernel stamp) */
+    uint32_t seq;      /* the driver's / file's sequence number */
+    uint32_t flags;    /* RP_HAL_CAM_* */
+    uint32_t drops;    /* frames dropped so far by this camera */
+} rp_hal_frame_t;
+
+typedef struct {
+    int64_t utime;     /* time of the set (the first camera's present frame), microseconds */
+    uint32_t seq;      /* set counter since start, +1 per grab that returned RP_HAL_OK */
+    uint8_t n_cams;
+    rp_hal_frame_t cam[RP_MAX_CAMS];
+    /* Sources that deliver features instead of images (the feature-level sim). */
+    uint8_t has_feats;
+    const rp_frameset_t *feats;
+    /* Sources that know the truth (sim, replay with ground truth): pose of cam1 in the world,
+     * [tx ty tz alpha beta gamma] as in rp_estimate_t. */
+    uint8_t has_truth;
+    rp_real truth[6];
+} rp_hal_set_t;
+
+typedef struct rp_hal_source rp_hal_source_t; /* defined by each source */
+
+/* Creates the source for cfg->kind. Sources are few and long-lived: one per process. */
+rp_hal_status_t rp_hal_open(rp_hal_source_t **src, const rp_hal_cfg_t *cfg);
+rp_hal_status_t rp_hal_start(rp_hal_source_t *src);
+/* Blocks until a synchronised set is ready or timeout_ms passes. On RP_HAL_E_TIMEOUT the set
+ * still describes which cameras were missing. */
+rp_hal_status_t rp_hal_grab(rp_hal_source_t *src, rp_hal_set_t *set);
+rp_hal_status_t rp_hal_stop(rp_hal_source_t *src);
+void rp_hal_close(rp_hal_source_t *src);
+
+/* Clock (CLOCK_MONOTONIC, microseconds) and sleep. */
+int64_t rp_hal_now_us(void);
+void rp_hal_sleep_us(int64_t us);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_HAL_H */
