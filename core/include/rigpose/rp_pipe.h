@@ -1,0 +1,189 @@
+/*
+ * rp_pipe.h - the image pipeline of the core: grey images of all cameras of a frame set in, one
+ * pose estimate out.
+ *
+ *   images (8-bit grey, one per rig camera) -> a tracker per camera of the layout (rp_track)
+ *     -> stereo matching of each pair's new features (rp_smatch, stereo layouts only)
+ *     -> rp_frameset_t -> the layout's estimator (rp_vo_stereo | rp_vo_gc | rp_vo_mono + rp_rc)
+ *     -> rp_estimate_t (pose of cam1 in the world, rp_frame.h)
+ *
+ * Layouts (names as in rigpose-sim and the configuration file):
+ *   stereo4  two stereo pairs (cfg.stereo.pair_a/pair_b, n_pairs = 2), one pose EKF
+ *   stereo2  one stereo pair (n_pairs = 1)
+ *   gc       single cameras (cfg.gc.cams), rigpose's generalised-camera EKF
+ *   cam1..cam4  one single camera alone (cfg.mono.cam), pose mapped to the rig frame
+ *   rc       four single cameras (cfg.rc_cams) fused by the paper's rigidity constraints
+ *
+ * Stereo pairs and feature ids. The first camera of a pair ("left", a) runs a full tracker
+ * (detection, tracking, top-up). The second ("right", b) never detects: it only tracks the
+ * features it was given by the matcher, which keep the left feature's id. Whenever the left
+ * tracker creates features (the first frame, every top-up), the new ones are matched into the
+ * right image of the same frame set (rp_smatch) and the matches are handed to the right
+ * tracker. So at every frame set the two cameras of a pair share the ids of every feature that
+ * was matched at its birth and is still tracked in both; the stereo estimator triangulates
+ * these whenever it (re-)initialises (its backtracking uses the previous frame set, which
+ * carries them too). Matching costs only at births, not every frame.
+ *
+ * Memory: rp_pipe_t holds RP_PIPE_MAX_TRACKERS trackers (each two pyramids and a response map:
+ * about 2 MB at 640x480) and the estimator: allocate it statically (`static rp_pipe_t pipe;`).
+ */
+#ifndef RP_PIPE_H
+#define RP_PIPE_H
+
+#include "rp_frame.h"
+#include "rp_opts.h"
+#include "rp_rc.h"
+#include "rp_rig.h"
+#include "rp_smatch.h"
+#include "rp_status.h"
+#include "rp_stereo.h"
+#include "rp_track.h"
+#include "rp_vo_gc.h"
+#include "rp_vo_mono.h"
+#include "rp_vo_stereo.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Trackers one pipeline runs (cameras of the largest layout: stereo4, gc, rc use 4). */
+#ifndef RP_PIPE_MAX_TRACKERS
+#define RP_PIPE_MAX_TRACKERS 4
+#endif
+RP_STATIC_ASSERT(RP_PIPE_MAX_TRACKERS >= 2 && RP_PIPE_MAX_TRACKERS <= RP_MAX_CAMS,
+                 "RP_PIPE_MAX_TRACKERS: 2..RP_MAX_CAMS");
+
+typedef enum {
+    RP_PIPE_STEREO4 = 0,
+    RP_PIPE_STEREO2,
+    RP_PIPE_GC,
+    RP_PIPE_CAM1,
+    RP_PIPE_CAM2,
+    RP_PIPE_CAM3,
+    RP_PIPE_CAM4,
+    RP_PIPE_RC,
+    RP_PIPE_LAYOUT_COUNT_ /* number of layouts; not a layout */
+} rp_pipe_layout_t;
+
+typedef struct {
+    rp_pipe_layout_t layout;
+    rp_track_cfg_t track;     /* tracker settings of every camera (cfg.track.cam is set per
+                               * camera by the pipeline) */
+    rp_smatch_cfg_t smatch;   /* stereo matching (stereo layouts) */
+    rp_vo_stereo_cfg_t stereo; /* stereo2 / stereo4: the estimator and its pairs */
+    rp_vo_gc_cfg_t gc;        /* gc: the estimator and its cameras */
+    rp_vo_mono_cfg_t mono;    /* cam1..cam4: the estimator and its camera; rc: the settings of
+                               * its four single-camera estimators (mono.cam is overridden) */
+    uint8_t rc_cams[RP_RC_MAX_CAMS]; /* rc: the four cameras, rc_cams[0] the reference (cam1) */
+    rp_rc_params_t rc;        /* rc: fusion parameters */
+} rp_pipe_cfg_t;
+
+/* What happened to one camera's image in the last step. */
+typedef enum {
+    RP_PIPE_CAM_UNUSED = 0,   /* not a camera of the layout */
+    RP_PIPE_CAM_OK,           /* tracked; features in the frame set */
+    RP_PIPE_CAM_MISSING,      /* no image this time (NULL entry or beyond n): no features; the
+                               * tracker keeps its last image and tracks from it next time */
+    RP_PIPE_CAM_BLANK,        /* blank image (no contrast): ignored as if missing */
+    RP_PIPE_CAM_BAD_IMAGE,    /* malformed image (truncated, stride < w, larger than the
+                               * tracker's limits, smaller than its window) or of another size
+                               * than the rig's calibration of the camera: ignored as if missing */
+    RP_PIPE_CAM_NO_FEATURES   /* image accepted, but no feature survived or was found */
+} rp_pipe_cam_state_t;
+
+/* Report of the last rp_pipe_step, per rig camera and per stereo pair. */
+typedef struct {
+    uint32_t frame;                           /* frame sets processed, this one included */
+    uint8_t cam_state[RP_MAX_CAMS];           /* rp_pipe_cam_state_t per rig camera */
+    rp_status_t cam_status[RP_MAX_CAMS];      /* the tracker's (or image check's) status */
+    rp_track_info_t track[RP_MAX_CAMS];       /* the tracker's events per rig camera */
+    rp_smatch_stats_t match[RP_MAX_PAIRS];    /* this step's matching per pair (n_in = 0: no
+                                               * new left features, matching not run) */
+    rp_status_t est_status;                   /* the estimator's status (RP_OK if not run) */
+} rp_pipe_info_t;
+
+/* Caller-owned pipeline state. Large: allocate it statically. Fields are read-only for callers
+ * (use the accessors below). */
+typedef struct {
+    uint32_t magic;                           /* set by rp_pipe_init */
+    const rp_rig_t *rig;
+    rp_pipe_cfg_t cfg;
+    uint8_t n_trk;                            /* trackers in use */
+    uint8_t trk_cam[RP_PIPE_MAX_TRACKERS];    /* rig camera of each tracker */
+    uint8_t trk_right[RP_PIPE_MAX_TRACKERS];  /* 1: second camera of a pair (no detection) */
+    int8_t cam_trk[RP_MAX_CAMS];              /* tracker of each rig camera, -1: none */
+    rp_tracker_t trk[RP_PIPE_MAX_TRACKERS];
+    uint32_t born_k[RP_PIPE_MAX_TRACKERS];    /* left trackers: next_k before this step (ids at
+                                               * or past it are new) */
+    rp_stereo_pair_t pair[RP_MAX_PAIRS];
+    rp_smatch_t sm;
+    union {
+        rp_vo_stereo_t stereo;
+        rp_vo_gc_t gc;
+        struct {
+            rp_vo_mono_t mono[RP_RC_MAX_CAMS]; /* camK uses mono[0] */
+            rp_real last_scale;               /* rc: last accepted scale S_j */
+        } single;
+    } est;
+    rp_frameset_t fs;                         /* the last frame set of features */
+    rp_estimate_t last;                       /* the last estimate */
+    rp_pipe_info_t info;
+    int64_t last_utime;
+    rp_feat_t scratch_a[RP_MAX_FEATS_PER_CAM]; /* new left features to match */
+    rp_feat_t scratch_b[RP_MAX_FEATS_PER_CAM]; /* their matches */
+} rp_pipe_t;
+
+/* Name of a layout ("stereo4", "stereo2", "gc", "cam1".."cam4", "rc"); "?" if out of range. */
+const char *rp_pipe_layout_name(rp_pipe_layout_t layout);
+
+/* Layout from its name (as above). RP_E_ARG: NULL or unknown name. */
+rp_status_t rp_pipe_layout_from_name(const char *name, rp_pipe_layout_t *layout);
+
+/* Defaults for layout on the paper's rig as rigpose-sim numbers its cameras (0 cam1, 1 cam2,
+ * 2 cam3, 3 cam4, 4 cam1's stereo partner, 5 cam3's): pairs (0,4) and (2,5); gc and rc over
+ * 0..3; camK over camera K-1. Every component's own defaults otherwise. A rig numbered
+ * differently (e.g. a KITTI pair: 0 left, 1 right) sets the camera fields after this call.
+ * RP_E_ARG: NULL or bad layout. */
+rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg);
+
+/* Set up pipe for rig (which must outlive it) with cfg (copied). Every camera of the layout
+ * must have a calibration size within the tracker limits (RP_TRACK_MAX_W x RP_TRACK_MAX_H).
+ * Returns RP_OK, RP_E_ARG (NULL, bad layout, a camera index out of the rig, a camera used
+ * twice, a size over the limits, more cameras than RP_PIPE_MAX_TRACKERS), or the error of a
+ * component's init (rp_track_init, rp_smatch_init, rp_stereo_pair_init, rp_vo_*_init). */
+rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg_t *cfg);
+
+/* Process one frame set: images[k] is rig camera k's image taken at utime (us), for
+ * k < n (n <= RP_MAX_CAMS); a NULL entry, or k >= n, means camera k has no image this time.
+ * Cameras not in the layout are ignored. est (required) receives the estimate.
+ * Returns:
+ *   RP_OK           the estimator ran and updated (est->flags: RP_EST_INITIALISING on the
+ *                   first frame set, RP_EST_TRACKING, RP_EST_REINIT ...). A camera of the
+ *                   layout without a usable image (missing, blank, malformed: see
+ *                   rp_pipe_cam_state_t and rp_pipe_info) contributes no features and
+ *                   sets RP_EST_DEGRADED; the others go on.
+ *   RP_E_TOO_FEW    the estimator could not update (too few features): est is its prediction
+ *                   with RP_EST_LOST; the next frame set tries to re-initialise
+ *   RP_E_DIVERGED   the estimator rejected its update and reset its covariance (prediction)
+ *   RP_E_DEGENERATE no camera of the layout had a usable image: the estimator was not run,
+ *                   est repeats the last estimate with RP_EST_LOST | RP_EST_DEGRADED
+ *   RP_E_RANGE      utime not after the previous frame set's: nothing done, est = last
+ *                   estimate with RP_EST_LOST
+ *   RP_E_ARG        NULL pipe, images or est, n > RP_MAX_CAMS, or pipe not initialised:
+ *                   nothing done (est, if given, zeroed with RP_EST_LOST)
+ *   otherwise       an estimator's error (rp_vo_*_step), est as it filled it. */
+rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
+                         int64_t utime, rp_estimate_t *est);
+
+/* The last frame set of features (what the estimator received). RP_E_ARG: NULL or not
+ * initialised. Before the first step: an empty frame set. */
+rp_status_t rp_pipe_frameset(const rp_pipe_t *pipe, const rp_frameset_t **fs);
+
+/* The report of the last step. RP_E_ARG: NULL or not initialised. */
+rp_status_t rp_pipe_info(const rp_pipe_t *pipe, const rp_pipe_info_t **info);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_PIPE_H */
