@@ -1,0 +1,492 @@
+/*
+ * rp_render.cpp - the textured shell scene and the per-pixel ray caster (see rp_render.hpp).
+ */
+#include "rp_render.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "rigpose/rp_camera.h"
+#include "rp_sim.h"
+
+namespace rpr {
+
+namespace {
+
+uint64_t mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* Uniform [0, 1) from a counter-style stream. */
+struct Stream {
+    uint64_t s;
+    double next()
+    {
+        s += 0x9E3779B97F4A7C15ull;
+        return (double)(mix64(s) >> 11) * (1.0 / 9007199254740992.0);
+    }
+};
+
+/* 3-D gradient noise on the integer lattice: at each lattice point a pseudo-random gradient
+ * (one of the 12 cube edge directions, picked by a seeded permutation), blended with the quintic
+ * fade 6t^5 - 15t^4 + 10t^3. Zero at lattice points, roughly in [-1, 1]. */
+class GradNoise {
+public:
+    explicit GradNoise(uint64_t seed)
+    {
+        for (int i = 0; i < 256; ++i) {
+            perm_[i] = (uint8_t)i;
+        }
+        Stream st{seed};
+        for (int i = 255; i > 0; --i) {
+            const int j = (int)(st.next() * (i + 1));
+            std::swap(perm_[i], perm_[j]);
+        }
+        for (int i = 0; i < 256; ++i) {
+            perm_[256 + i] = perm_[i];
+        }
+    }
+
+    double operator()(double x, double y, double z) const
+    {
+        const double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
+        const int X = (int)fx & 255, Y = (int)fy & 255, Z = (int)fz & 255;
+        x -= fx;
+        y -= fy;
+        z -= fz;
+        const double u = fade(x), v = fade(y), w = fade(z);
+        double c[8];
+        for (int k = 0; k < 8; ++k) {
+            const int dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
+            const int h = perm_[perm_[perm_[X + dx] + Y + dy] + Z + dz];
+            c[k] = dot(h, x - dx, y - dy, z - dz);
+        }
+        const double x00 = c[0] + u * (c[1] - c[0]), x10 = c[2] + u * (c[3] - c[2]);
+        const double x01 = c[4] + u * (c[5] - c[4]), x11 = c[6] + u * (c[7] - c[6]);
+        const double y0 = x00 + v * (x10 - x00), y1 = x01 + v * (x11 - x01);
+        return y0 + w * (y1 - y0);
+    }
+
+private:
+    static double fade(double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
+    static double dot(int h, double x, double y, double z)
+    {
+        switch (h % 12) { /* the 12 edge midpoints of the cube */
+        case 0: return x + y;
+        case 1: return -x + y;
+        case 2: return x - y;
+        case 3: return -x - y;
+        case 4: return x + z;
+        case 5: return -x + z;
+        case 6: return x - z;
+        case 7: return -x - z;
+        case 8: return y + z;
+        case 9: return -y + z;
+        case 10: return y - z;
+        default: return -y - z;
+        }
+    }
+    uint8_t perm_[512];
+};
+
+double smoothstep(double a, double b, double x)
+{
+    const double t = std::min(1.0, std::max(0.0, (x - a) / (b - a)));
+    return t * t * (3.0 - 2.0 * t);
+}
+
+/* Stream domains of a scene seed. */
+enum { DOM_ALBEDO = 1, DOM_RADIUS = 2, DOM_STAIN1 = 3, DOM_STAIN2 = 4 };
+
+} /* namespace */
+
+uint64_t key(uint64_t a, uint64_t b, uint64_t c, uint64_t d)
+{
+    uint64_t h = mix64(a + 0x9E3779B97F4A7C15ull);
+    h = mix64(h ^ (b + 0x632BE59BD9B4E019ull));
+    h = mix64(h ^ (c + 0x8CB92BA72F3D8DD7ull));
+    return mix64(h ^ d);
+}
+
+/* ---- cube map ---------------------------------------------------------------------------- */
+
+void CubeMap::init(int n, int pad)
+{
+    n_ = n;
+    pad_ = pad;
+    side_ = n + 2 * pad;
+    v_.assign((size_t)6 * side_ * side_, 0.0f);
+}
+
+void CubeMap::texel_dir(int face, int i, int j, double u[3]) const
+{
+    const int m = face >> 1;
+    const double sg = (face & 1) ? -1.0 : 1.0;
+    u[m] = sg;
+    u[(m + 1) % 3] = ((i - pad_) + 0.5) / n_ * 2.0 - 1.0;
+    u[(m + 2) % 3] = ((j - pad_) + 0.5) / n_ * 2.0 - 1.0;
+    const double s = 1.0 / std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    u[0] *= s;
+    u[1] *= s;
+    u[2] *= s;
+}
+
+template <class F> void CubeMap::fill(F f)
+{
+    const int rows = 6 * side_;
+    cv::parallel_for_(cv::Range(0, rows), [&](const cv::Range &r) {
+        for (int row = r.start; row < r.end; ++row) {
+            const int face = row / side_, j = row % side_;
+            float *dst = &v_[(size_t)row * side_];
+            for (int i = 0; i < side_; ++i) {
+                double u[3];
+                texel_dir(face, i, j, u);
+                dst[i] = (float)f(u);
+            }
+        }
+    });
+}
+
+float CubeMap::at(const double u[3]) const
+{
+    const double ax = std::fabs(u[0]), ay = std::fabs(u[1]), az = std::fabs(u[2]);
+    const int m = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+    const int face = 2 * m + (u[m] < 0.0);
+    const double inv = 1.0 / std::fabs(u[m]);
+    const double x = (u[(m + 1) % 3] * inv + 1.0) * 0.5 * n_ - 0.5 + pad_;
+    const double y = (u[(m + 2) % 3] * inv + 1.0) * 0.5 * n_ - 0.5 + pad_;
+    const int i = std::min(side_ - 2, std::max(0, (int)std::floor(x)));
+    const int j = std::min(side_ - 2, std::max(0, (int)std::floor(y)));
+    const float fx = (float)(x - i), fy = (float)(y - j);
+    const float *p = &v_[((size_t)face * side_ + j) * side_ + i];
+    const float top = p[0] + fx * (p[1] - p[0]);
+    const float bot = p[side_] + fx * (p[side_ + 1] - p[side_]);
+    return top + fy * (bot - top);
+}
+
+/* ---- scene ------------------------------------------------------------------------------- */
+
+Scene::Scene(const SceneCfg &cfg) : cfg_(cfg)
+{
+    /* Radius: r_mid + r_amp tanh(0.9 z), z a unit-variance sum of six random plane waves over
+     * the sphere of directions (wave numbers 1.5..3.5 per radian): a few broad bumps and dents. */
+    struct Wave {
+        double a[3], k, phi, w;
+    } waves[6];
+    Stream st{key(cfg.seed, DOM_RADIUS)};
+    double w2 = 0.0;
+    for (Wave &wv : waves) {
+        const double z = 2.0 * st.next() - 1.0, ph = 2.0 * M_PI * st.next();
+        const double rho = std::sqrt(std::max(0.0, 1.0 - z * z));
+        wv.a[0] = rho * std::cos(ph);
+        wv.a[1] = rho * std::sin(ph);
+        wv.a[2] = z;
+        wv.k = 1.5 + 2.0 * st.next();
+        wv.phi = 2.0 * M_PI * st.next();
+        wv.w = 0.5 + st.next();
+        w2 += 0.5 * wv.w * wv.w;
+    }
+    const double norm = 1.0 / std::sqrt(w2);
+    radius_.init(cfg.radius_face_px, 2);
+    radius_.fill([&](const double u[3]) {
+        double z = 0.0;
+        for (const Wave &wv : waves) {
+            z += wv.w * std::cos(wv.k * (wv.a[0] * u[0] + wv.a[1] * u[1] + wv.a[2] * u[2]) + wv.phi);
+        }
+        return cfg.r_mid + cfg.r_amp * std::tanh(0.9 * z * norm);
+    });
+
+    /* Albedo: fractal gradient noise (octaves 0.25 m .. 7.8 mm, amplitude ~ sqrt(wavelength))
+     * plus soft-edged stains at 5 cm and 1.5 cm, evaluated at r_mid u (metres). */
+    const GradNoise base(key(cfg.seed, DOM_ALBEDO)), stain1(key(cfg.seed, DOM_STAIN1)),
+        stain2(key(cfg.seed, DOM_STAIN2));
+    const int n_oct = 6;
+    double amp_sum = 0.0;
+    for (int o = 0; o < n_oct; ++o) {
+        amp_sum += std::sqrt(std::ldexp(1.0, -o));
+    }
+    const double r0 = cfg.r_mid;
+    albedo_.init(cfg.face_px, 2);
+    albedo_.fill([&](const double u[3]) {
+        double a = 0.2;
+        if (!cfg.plain) {
+            const double P[3] = {r0 * u[0], r0 * u[1], r0 * u[2]};
+            double f = 0.0;
+            for (int o = 0; o < n_oct; ++o) {
+                const double inv_l = std::ldexp(1.0, o) / 0.25; /* 1 / wavelength, 1/m */
+                const double off = 17.31 * o;
+                f += std::sqrt(std::ldexp(1.0, -o)) *
+                     base(P[0] * inv_l + off, P[1] * inv_l - off, P[2] * inv_l + 0.5 * off);
+            }
+            f *= 1.8 / amp_sum;
+            const double s1 = smoothstep(0.08, 0.16, stain1(P[0] / 0.05, P[1] / 0.05, P[2] / 0.05));
+            const double s2 =
+                smoothstep(0.15, 0.22, stain2(P[0] / 0.015, P[1] / 0.015, P[2] / 0.015));
+            a = 0.5 + 0.4 * f - 0.16 * s1 + 0.16 * s2;
+            a = std::min(0.97, std::max(0.03, a));
+        }
+        for (const Marker &mk : cfg.markers) {
+            const double n = std::sqrt(mk.u[0] * mk.u[0] + mk.u[1] * mk.u[1] + mk.u[2] * mk.u[2]);
+            const double c = (u[0] * mk.u[0] + u[1] * mk.u[1] + u[2] * mk.u[2]) / n;
+            const double ang = std::acos(std::min(1.0, std::max(-1.0, c)));
+            if (ang < 6.0 * mk.sigma_rad) {
+                a += mk.amp * std::exp(-0.5 * ang * ang / (mk.sigma_rad * mk.sigma_rad));
+            }
+        }
+        return a;
+    });
+}
+
+void Scene::surface_point(const double u[3], double M[3]) const
+{
+    const double n = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    const double r = radius(u) / n;
+    M[0] = r * u[0];
+    M[1] = r * u[1];
+    M[2] = r * u[2];
+}
+
+bool Scene::intersect(const double C[3], const double d[3], double *t_out, double u_hit[3]) const
+{
+    const double b = C[0] * d[0] + C[1] * d[1] + C[2] * d[2];
+    const double cc = C[0] * C[0] + C[1] * C[1] + C[2] * C[2];
+    /* Distance along the ray to the sphere of radius r around the origin (C inside it). */
+    auto sphere_t = [&](double r) {
+        const double disc = b * b - (cc - r * r);
+        return disc > 0.0 ? -b + std::sqrt(disc) : -1.0;
+    };
+    /* g(t) = |C + t d| - r(dir(C + t d)): negative inside the surface, zero on it. */
+    auto g = [&](double t, double p[3]) {
+        p[0] = C[0] + t * d[0];
+        p[1] = C[1] + t * d[1];
+        p[2] = C[2] + t * d[2];
+        return std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - radius(p);
+    };
+    if (cc > 0.0 && std::sqrt(cc) >= radius(C)) {
+        return false; /* outside the surface */
+    }
+    double p[3];
+    double t0 = sphere_t(cfg_.r_mid);
+    if (t0 <= 0.0) {
+        return false;
+    }
+    double g0 = g(t0, p);
+    double t1 = sphere_t(radius(p));
+    if (t1 <= 0.0) {
+        return false;
+    }
+    double g1 = g(t1, p);
+    for (int it = 0; it < 16 && std::fabs(g1) > 1e-10; ++it) {
+        const double den = g1 - g0;
+        double t2 = std::fabs(den) > 1e-15 ? t1 - g1 * (t1 - t0) / den : sphere_t(radius(p));
+        if (!(t2 > 0.0) || !std::isfinite(t2)) {
+            t2 = sphere_t(radius(p)); /* fixed-point step instead */
+            if (t2 <= 0.0) {
+                return false;
+            }
+        }
+        t0 = t1;
+        g0 = g1;
+        t1 = t2;
+        g1 = g(t1, p);
+    }
+    if (std::fabs(g1) > 1e-7) {
+        return false;
+    }
+    const double n = 1.0 / std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    u_hit[0] = p[0] * n;
+    u_hit[1] = p[1] * n;
+    u_hit[2] = p[2] * n;
+    *t_out = t1;
+    return true;
+}
+
+/* ---- cameras ----------------------------------------------------------------------------- */
+
+bool make_rays(const rp_camera_t &cam, int ss, CamRays *out)
+{
+    if (ss < 1 || ss > 8 || rp_cam_check(&cam) != RP_OK) {
+        return false;
+    }
+    out->w = cam.width;
+    out->h = cam.height;
+    out->ss = ss;
+    out->n_fail = 0;
+    const size_t per_px = (size_t)ss * ss;
+    out->ray.assign((size_t)out->w * out->h * per_px * 3u, 0.0f);
+    for (int v = 0; v < out->h; ++v) {
+        for (int u = 0; u < out->w; ++u) {
+            float *r = &out->ray[((size_t)v * out->w + u) * per_px * 3u];
+            for (int b = 0; b < ss; ++b) {
+                for (int a = 0; a < ss; ++a, r += 3) {
+                    const rp_real uv[2] = {(rp_real)(u - 0.5 + (a + 0.5) / ss),
+                                           (rp_real)(v - 0.5 + (b + 0.5) / ss)};
+                    rp_real xn[2];
+                    if (rp_cam_unproject(&cam, uv, xn) != RP_OK) {
+                        ++out->n_fail; /* stays (0, 0, 0): rendered black */
+                        continue;
+                    }
+                    const double x = (double)xn[0], y = (double)xn[1];
+                    const double s = 1.0 / std::sqrt(x * x + y * y + 1.0);
+                    r[0] = (float)(x * s);
+                    r[1] = (float)(y * s);
+                    r[2] = (float)s;
+                }
+            }
+        }
+    }
+    return true;
+}
+
+void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double d[3],
+                   const double R[9], const CamRays &rays, cv::Mat *out)
+{
+    /* Camera k in the world: centre C = d + R D_k, axes M = R R_k (columns). */
+    const rp_rig_cam_t &rc = rig.cam[k];
+    double C[3], M[9];
+    for (int i = 0; i < 3; ++i) {
+        C[i] = d[i];
+        for (int j = 0; j < 3; ++j) {
+            C[i] += R[3 * i + j] * (double)rc.D[j];
+            M[3 * i + j] = 0.0;
+            for (int l = 0; l < 3; ++l) {
+                M[3 * i + j] += R[3 * i + l] * (double)rc.R[3 * l + j];
+            }
+        }
+    }
+    out->create(rays.h, rays.w, CV_32F);
+    const int per_px = rays.ss * rays.ss;
+    const float inv = 1.0f / (float)per_px;
+    cv::parallel_for_(cv::Range(0, rays.h), [&](const cv::Range &rr) {
+        for (int v = rr.start; v < rr.end; ++v) {
+            float *dst = out->ptr<float>(v);
+            for (int u = 0; u < rays.w; ++u) {
+                const float *r = &rays.ray[((size_t)v * rays.w + u) * per_px * 3u];
+                float acc = 0.0f;
+                for (int s = 0; s < per_px; ++s, r += 3) {
+                    if (r[2] == 0.0f) {
+                        continue;
+                    }
+                    double dw[3];
+                    for (int i = 0; i < 3; ++i) {
+                        dw[i] = M[3 * i] * r[0] + M[3 * i + 1] * r[1] + M[3 * i + 2] * r[2];
+                    }
+                    double t, uh[3];
+                    if (scene.intersect(C, dw, &t, uh)) {
+                        acc += scene.albedo(uh);
+                    }
+                }
+                dst[u] = acc * inv;
+            }
+        }
+    });
+}
+
+void finish_image(const cv::Mat &albedo, const Effects &fx, cv::Mat *out8)
+{
+    cv::Mat img = albedo * (255.0 * fx.gain) + fx.offset;
+    if (fx.blur_sigma > 0.0) {
+        cv::GaussianBlur(img, img, cv::Size(0, 0), fx.blur_sigma, fx.blur_sigma,
+                         cv::BORDER_REFLECT_101);
+    }
+    if (fx.noise_grey > 0.0) {
+        cv::Mat noise(img.size(), CV_32F);
+        cv::RNG rng(fx.noise_key | 1u);
+        rng.fill(noise, cv::RNG::NORMAL, 0.0, fx.noise_grey);
+        img += noise;
+    }
+    img.convertTo(*out8, CV_8U); /* rounds and saturates */
+}
+
+} /* namespace rpr */
+
+/* ---- a rendered run ---------------------------------------------------------------------- */
+
+namespace rpr {
+
+Sequence::Sequence(const SeqCfg &cfg) : cfg_(cfg)
+{
+    std::memset(&rig_, 0, sizeof rig_);
+    if (cfg.width < 32 || cfg.height < 32 || cfg.width > 4096 || cfg.height > 4096) {
+        why_ = "image size out of range (32..4096)";
+        return;
+    }
+    if (cfg.frames < 1 || cfg.ss < 1 || cfg.ss > 8 || cfg.face_px < 64 || cfg.face_px > 8192) {
+        why_ = "frames >= 1, ss 1..8, face_px 64..8192";
+        return;
+    }
+    rp_sim_cfg_t sc;
+    rp_sim_default_cfg(&sc);
+    sc.width = (uint16_t)cfg.width;
+    sc.height = (uint16_t)cfg.height;
+    sc.focal_px = cfg.focal_px > 0.0 ? cfg.focal_px : 800.0 * cfg.width / 640.0;
+    sc.n_frames = cfg.frames;
+    sc.n_points = 0; /* the scene replaces the point cloud */
+    frame_dt_ = sc.frame_dt;
+    rp_sim_run_t sr;
+    if (rp_sim_run_init(&sr, &sc, cfg.seed, cfg.run) != 0) {
+        why_ = "out of memory";
+        return;
+    }
+    rig_ = sr.rig;
+    truth_.assign(sr.truth, sr.truth + 6u * cfg.frames);
+    truth_R_.assign(sr.truth_R, sr.truth_R + 9u * cfg.frames);
+    rp_sim_run_free(&sr);
+    for (int k = 0; k < rig_.n_cams; ++k) {
+        rp_camera_t &c = rig_.cam[k].cam;
+        c.k1 = (rp_real)cfg.dist[0];
+        c.k2 = (rp_real)cfg.dist[1];
+        c.p1 = (rp_real)cfg.dist[2];
+        c.p2 = (rp_real)cfg.dist[3];
+        c.k3 = (rp_real)cfg.dist[4];
+    }
+    if (rp_rig_check(&rig_) != RP_OK) {
+        why_ = "bad camera parameters";
+        return;
+    }
+    /* Cameras with equal intrinsics share one ray table. */
+    rays_.resize(1);
+    if (!make_rays(rig_.cam[0].cam, cfg.ss, &rays_[0])) {
+        why_ = "bad camera parameters";
+        return;
+    }
+    SceneCfg scfg;
+    scfg.seed = key(cfg.seed, cfg.run, 0x5CE4E);
+    scfg.face_px = cfg.face_px;
+    if (cfg.flat) {
+        scfg.r_amp = 0.0;
+    }
+    scene_.reset(new Scene(scfg));
+}
+
+Pose Sequence::pose(uint32_t j) const
+{
+    Pose p;
+    std::memcpy(p.d, &truth_[6u * j], sizeof p.d);
+    std::memcpy(p.R, &truth_R_[9u * j], sizeof p.R);
+    return p;
+}
+
+int64_t Sequence::utime(uint32_t j) const { return (int64_t)std::llround(j * frame_dt_ * 1e6); }
+
+void Sequence::render(uint32_t j, int k, cv::Mat *out8) const
+{
+    const Pose p = pose(j);
+    cv::Mat alb;
+    render_albedo(*scene_, rig_, k, p.d, p.R, rays_[0], &alb);
+    Effects fx;
+    fx.gain = 1.0 + cfg_.brightness * std::sin(2.0 * M_PI * j / 40.0 + k);
+    fx.blur_sigma = cfg_.blur_sigma;
+    fx.noise_grey = cfg_.noise_grey;
+    fx.noise_key = key(cfg_.seed, cfg_.run, j, (uint64_t)k + 1u);
+    finish_image(alb, fx, out8);
+}
+
+} /* namespace rpr */

@@ -1,0 +1,172 @@
+/*
+ * rp_render.hpp - rendering the paper's six-camera rig moving through a textured scene (host
+ * only, C++ with OpenCV). Used by rigpose-render (writes a replay folder), rigpose-e2e (renders
+ * in memory and runs the image pipeline) and their tests.
+ *
+ * Scene ("shell"): the paper's shell of points made a closed textured surface around the start,
+ * at the same depths: in direction u (unit vector from the world origin) the surface lies at
+ * radius r(u) = r_mid + r_amp s(u), s a smooth random function in [-1, 1], so the radii span
+ * the simulation's shell 0.667..1 m (r_amp = 0: a sphere of radius r_mid). r and the surface's
+ * grey level (albedo) are functions of u only, stored as cube maps (one square image per face,
+ * bilinear lookups; the faces carry a border so that a lookup never crosses a face). The albedo
+ * is 3-D gradient noise of the point r_mid u (metres): several octaves from 0.25 m down to 6 mm
+ * plus soft-edged patches ("stains") at two scales; deterministic from the seed.
+ *
+ * Rendering is per-pixel ray casting, exact up to the cube maps' interpolation: each (sub)pixel's
+ * ray comes from rp_cam_unproject (the rig's distortion model), goes through the rig pose into
+ * the world, and is intersected with the surface by a secant iteration on |C + t d| = r(dir).
+ * A pixel is the mean of ss x ss sub-pixel samples (box filter over the pixel's area).
+ * Conventions as DESIGN.md: pose of cam1 in the world (d_j, R_j); camera k at D_k, R_k.
+ */
+#ifndef RP_RENDER_HPP
+#define RP_RENDER_HPP
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "rigpose/rp_rig.h"
+
+namespace rpr {
+
+/* A bright Gaussian spot painted on the surface (for tests): centre direction u (any length),
+ * angular sigma (rad), amplitude added to the albedo (grey levels / 255). */
+struct Marker {
+    double u[3];
+    double sigma_rad;
+    double amp;
+};
+
+struct SceneCfg {
+    uint64_t seed = 1;
+    double r_mid = 0.8335;  /* m: the shell's mid radius (0.667 + 1) / 2 */
+    double r_amp = 0.1665;  /* m: radii span r_mid +- r_amp */
+    int face_px = 1024;     /* albedo cube map face side, texels (1.6 mm at r_mid) */
+    int radius_face_px = 96; /* radius cube map face side, texels */
+    bool plain = false;     /* uniform grey albedo (0.2): with markers, for geometry tests */
+    std::vector<Marker> markers;
+};
+
+/* A float cube map: 6 faces of n x n texels plus a border of `pad` on every side. */
+class CubeMap {
+public:
+    void init(int n, int pad);
+    /* Fill every texel (border included) with f(unit direction). */
+    template <class F> void fill(F f);
+    /* Bilinear value in direction u (need not be unit; must be non-zero). */
+    float at(const double u[3]) const;
+    /* Texel (face, i, j) -> unit direction (i, j may lie in the border). */
+    void texel_dir(int face, int i, int j, double u[3]) const;
+
+private:
+    int n_ = 0, pad_ = 0, side_ = 0;
+    std::vector<float> v_;
+    friend class Scene;
+};
+
+class Scene {
+public:
+    /* Builds the cube maps (a few seconds at the default size; uses cv::parallel_for_). */
+    explicit Scene(const SceneCfg &cfg);
+    const SceneCfg &cfg() const { return cfg_; }
+    /* Surface radius (m) in direction u. */
+    double radius(const double u[3]) const { return radius_.at(u); }
+    /* Albedo (0..1, may exceed slightly with markers) in direction u. */
+    float albedo(const double u[3]) const { return albedo_.at(u); }
+    /* The surface point in direction u: r(u) u/|u| (world, m). */
+    void surface_point(const double u[3], double M[3]) const;
+    /* Ray C + t d (d unit, C inside the surface) against the surface: t > 0 (m) and the hit's
+     * direction from the origin (unit). false if C is not inside or the iteration failed. */
+    bool intersect(const double C[3], const double d[3], double *t, double u_hit[3]) const;
+
+private:
+    SceneCfg cfg_;
+    CubeMap radius_, albedo_;
+};
+
+/* Per-camera rays: for each pixel (row-major) ss x ss sub-pixel rays in the camera frame
+ * (unit vectors, float), from rp_cam_unproject. Sub-pixel (a, b) of pixel (u, v) sits at
+ * (u - 0.5 + (a + 0.5) / ss, v - 0.5 + (b + 0.5) / ss). */
+struct CamRays {
+    int w = 0, h = 0, ss = 1;
+    std::vector<float> ray; /* (h * w * ss * ss) x 3 */
+    int n_fail = 0;         /* sub-pixels with no valid ray (distortion folds): rendered black */
+};
+bool make_rays(const rp_camera_t &cam, int ss, CamRays *out);
+
+/* Image of rig camera k at pose (d, R) (cam1 in the world; R row-major): a CV_32F image of
+ * albedo values (0..1); pixels whose ray misses are 0. */
+void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double d[3],
+                   const double R[9], const CamRays &rays, cv::Mat *out);
+
+/* Image degradations, all optional, applied to the albedo image in this order:
+ * gain (brightness change) and offset, Gaussian blur, Gaussian grey-level noise, rounding to
+ * 8 bits with saturation. The noise is a function of noise_key only. */
+struct Effects {
+    double gain = 1.0;        /* multiplies the albedo (x 255) */
+    double offset = 0.0;      /* grey levels added */
+    double blur_sigma = 0.0;  /* px; 0 = none */
+    double noise_grey = 0.0;  /* sigma, grey levels; 0 = none */
+    uint64_t noise_key = 0;
+};
+void finish_image(const cv::Mat &albedo, const Effects &fx, cv::Mat *out8);
+
+/* The rig pose of a frame as DESIGN.md: translation and rotation matrix (double). */
+struct Pose {
+    double d[3];
+    double R[9];
+};
+
+/* splitmix64 mixing of a few integers into one key (for per-frame, per-camera streams). */
+uint64_t key(uint64_t a, uint64_t b, uint64_t c = 0, uint64_t d = 0);
+
+/* A rendered run of the paper's protocol: the six-camera rig of rp_sim_make_rig (with the given
+ * intrinsics and distortion), the trajectory of run `run` of the experiment seeded by `seed`
+ * (rp_sim_run_init: the same motion as rigpose-sim's run), a shell scene seeded by (seed, run). */
+struct SeqCfg {
+    int width = 640, height = 480;
+    double focal_px = 0.0;       /* 0: 800 x width / 640 (the protocol's 800 px at 640x480) */
+    double dist[5] = {0, 0, 0, 0, 0}; /* k1 k2 p1 p2 k3 of every camera */
+    int ss = 2;                  /* sub-pixel samples per axis */
+    uint32_t frames = 100;
+    uint64_t seed = 1;
+    uint32_t run = 0;
+    double noise_grey = 1.0;     /* image noise sigma, grey levels */
+    double blur_sigma = 0.0;     /* px */
+    double brightness = 0.0;     /* gain amplitude: gain_j,k = 1 + b sin(2 pi j / 40 + k) */
+    bool flat = false;           /* sphere of radius r_mid instead of the bumpy shell */
+    int face_px = 1024;
+};
+
+class Sequence {
+public:
+    /* ok() is false if the configuration is unusable (why() says what). */
+    explicit Sequence(const SeqCfg &cfg);
+    bool ok() const { return why_.empty(); }
+    const std::string &why() const { return why_; }
+    const SeqCfg &cfg() const { return cfg_; }
+    const rp_rig_t &rig() const { return rig_; }
+    const Scene &scene() const { return *scene_; }
+    /* Truth of frame j: [tx ty tz alpha beta gamma] (as rp_estimate_t.p) and the pose. */
+    const double *truth(uint32_t j) const { return &truth_[6u * j]; }
+    Pose pose(uint32_t j) const;
+    int64_t utime(uint32_t j) const;
+    /* 8-bit image of rig camera k at frame j, with the configured degradations. */
+    void render(uint32_t j, int k, cv::Mat *out8) const;
+
+private:
+    SeqCfg cfg_;
+    std::string why_;
+    rp_rig_t rig_;
+    std::vector<double> truth_, truth_R_;
+    double frame_dt_ = 1.0 / 30.0;
+    std::unique_ptr<Scene> scene_;
+    std::vector<CamRays> rays_;
+};
+
+} /* namespace rpr */
+
+#endif /* RP_RENDER_HPP */

@@ -1,0 +1,117 @@
+/*
+ * rp_render_cli.hpp - the command-line options of a rendered sequence (rpr::SeqCfg), shared by
+ * rigpose-render and rigpose-e2e.
+ */
+#ifndef RP_RENDER_CLI_HPP
+#define RP_RENDER_CLI_HPP
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "rp_render.hpp"
+
+namespace rpr {
+
+inline void cli_usage(FILE *out)
+{
+    std::fprintf(out,
+                 "  --seed S         experiment seed: motion of rigpose-sim's run, scene (default 1)\n"
+                 "  --run R          run index within the experiment (default 0)\n"
+                 "  --frames N       frame sets (default 100)\n"
+                 "  --width W --height H   image size (default 640x480)\n"
+                 "  --focal-px F     fx = fy (default 800 x W / 640); principal point at the centre\n"
+                 "  --dist k1,k2,p1,p2,k3  OpenCV distortion of every camera (default none)\n"
+                 "  --ss N           sub-pixel samples per axis, 1..8 (default 2)\n"
+                 "  --noise-grey S   Gaussian image noise, grey levels (default 1)\n"
+                 "  --blur S         Gaussian blur sigma, px (default 0)\n"
+                 "  --brightness A   gain change 1 + A sin(2 pi j / 40 + k) (default 0)\n"
+                 "  --flat           sphere of radius 0.8335 m instead of the bumpy shell\n"
+                 "  --face-px N      texture cube map face side (default 1024)\n");
+}
+
+/* Parses the option at argv[i] (and its value) into cfg. Returns the number of arguments used,
+ * 0 if argv[i] is not one of these options, -1 on a bad value (message printed). */
+inline int cli_parse(int argc, char **argv, int i, SeqCfg *cfg)
+{
+    const char *o = argv[i];
+    if (!std::strcmp(o, "--flat")) {
+        cfg->flat = true;
+        return 1;
+    }
+    static const char *const with_value[] = {"--seed",  "--run",        "--frames", "--width",
+                                             "--height", "--focal-px",  "--dist",   "--ss",
+                                             "--noise-grey", "--blur",  "--brightness",
+                                             "--face-px"};
+    bool known = false;
+    for (const char *w : with_value) {
+        known = known || !std::strcmp(o, w);
+    }
+    if (!known) {
+        return 0;
+    }
+    if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", o);
+        return -1;
+    }
+    const char *v = argv[i + 1];
+    char *end = nullptr;
+    errno = 0;
+    bool bad = false;
+    if (!std::strcmp(o, "--dist")) {
+        const char *p = v;
+        for (int c = 0; c < 5 && !bad; ++c) {
+            cfg->dist[c] = std::strtod(p, &end);
+            bad = end == p || (c < 4 && *end != ',') || (c == 4 && *end) || !std::isfinite(cfg->dist[c]);
+            p = end + 1;
+        }
+    } else if (!std::strcmp(o, "--seed")) {
+        cfg->seed = std::strtoull(v, &end, 0);
+        bad = *v == '-';
+    } else {
+        const double x = std::strtod(v, &end);
+        bad = !std::isfinite(x);
+        if (!std::strcmp(o, "--run")) {
+            bad = bad || x < 0 || x > 1e9 || x != std::floor(x);
+            cfg->run = (uint32_t)x;
+        } else if (!std::strcmp(o, "--frames")) {
+            bad = bad || x < 1 || x > 1e6 || x != std::floor(x);
+            cfg->frames = (uint32_t)x;
+        } else if (!std::strcmp(o, "--width")) {
+            bad = bad || x < 32 || x > 4096 || x != std::floor(x);
+            cfg->width = (int)x;
+        } else if (!std::strcmp(o, "--height")) {
+            bad = bad || x < 32 || x > 4096 || x != std::floor(x);
+            cfg->height = (int)x;
+        } else if (!std::strcmp(o, "--focal-px")) {
+            bad = bad || x <= 0 || x > 1e6;
+            cfg->focal_px = x;
+        } else if (!std::strcmp(o, "--ss")) {
+            bad = bad || x < 1 || x > 8 || x != std::floor(x);
+            cfg->ss = (int)x;
+        } else if (!std::strcmp(o, "--noise-grey")) {
+            bad = bad || x < 0 || x > 255;
+            cfg->noise_grey = x;
+        } else if (!std::strcmp(o, "--blur")) {
+            bad = bad || x < 0 || x > 50;
+            cfg->blur_sigma = x;
+        } else if (!std::strcmp(o, "--brightness")) {
+            bad = bad || x < 0 || x > 0.9;
+            cfg->brightness = x;
+        } else { /* --face-px */
+            bad = bad || x < 64 || x > 8192 || x != std::floor(x);
+            cfg->face_px = (int)x;
+        }
+    }
+    if (bad || errno || (end && *end && std::strcmp(o, "--dist"))) {
+        std::fprintf(stderr, "bad value for %s: '%s'\n", o, v);
+        return -1;
+    }
+    return 2;
+}
+
+} /* namespace rpr */
+
+#endif /* RP_RENDER_CLI_HPP */

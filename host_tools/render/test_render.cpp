@@ -1,0 +1,252 @@
+/*
+ * test_render.cpp - rigpose-render's scene and ray caster (rp_render.hpp), run by `make test`:
+ *  - determinism: the same (seed, run) renders the same bytes; another seed does not;
+ *  - ray consistency: the surface point hit by a pixel centre's ray projects back (rp_rig_project,
+ *    with distortion) onto that pixel centre, in all six cameras;
+ *  - image content: a Gaussian spot painted on the surface renders with its centroid where
+ *    rp_rig_project puts its centre, in all six cameras, with and without distortion;
+ *  - the scene's radii span the simulation's shell (0.667..1 m).
+ * Prints the measured figures; ends with "[  PASSED  ] N test(s)." and exit 0 when all pass.
+ */
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "rigpose/rp_rig.h"
+#include "rp_render.hpp"
+
+static int n_pass = 0, n_fail = 0;
+
+static void check(bool ok, const char *what)
+{
+    std::printf("%s %s\n", ok ? "[       OK ]" : "[  FAILED  ]", what);
+    (ok ? n_pass : n_fail)++;
+}
+
+static rpr::SeqCfg small_cfg(uint64_t seed)
+{
+    rpr::SeqCfg c;
+    c.width = 320;
+    c.height = 240;
+    c.frames = 3;
+    c.seed = seed;
+    c.face_px = 256; /* small texture: fast, enough for determinism */
+    c.noise_grey = 1.0;
+    c.blur_sigma = 0.5;
+    c.brightness = 0.2;
+    return c;
+}
+
+static void test_determinism()
+{
+    rpr::Sequence a(small_cfg(7)), b(small_cfg(7)), c(small_cfg(8));
+    check(a.ok() && b.ok() && c.ok(), "sequences set up");
+    bool same = true, differs = false, textured = true;
+    for (int k = 0; k < 6; ++k) {
+        cv::Mat ia, ib, ic;
+        a.render(2, k, &ia);
+        b.render(2, k, &ib);
+        c.render(2, k, &ic);
+        same = same && cv::norm(ia, ib, cv::NORM_INF) == 0.0;
+        differs = differs || cv::norm(ia, ic, cv::NORM_INF) > 0.0;
+        cv::Scalar mean, sd;
+        cv::meanStdDev(ia, mean, sd);
+        textured = textured && sd[0] > 15.0;
+        if (k == 0) {
+            std::printf("  cam0 frame 2: mean %.1f, std %.1f grey levels\n", mean[0], sd[0]);
+        }
+    }
+    check(same, "same seed: identical images in all six cameras");
+    check(differs, "other seed: different images");
+    check(textured, "images are textured (std > 15 grey levels)");
+}
+
+/* Pixel centres -> ray -> surface hit -> rp_rig_project: back on the pixel centre. */
+static void test_ray_consistency()
+{
+    rpr::SeqCfg cfg = small_cfg(3);
+    cfg.face_px = 64;
+    cfg.dist[0] = -0.25;
+    cfg.dist[1] = 0.08;
+    cfg.dist[2] = 1e-3;
+    cfg.dist[3] = -5e-4;
+    rpr::Sequence seq(cfg);
+    check(seq.ok(), "distorted sequence set up");
+    const rp_rig_t &rig = seq.rig();
+    rpr::CamRays rays;
+    check(rpr::make_rays(rig.cam[0].cam, 1, &rays) && rays.n_fail == 0, "rays of every pixel");
+    double worst = 0.0;
+    int n = 0, misses = 0;
+    for (uint32_t j = 0; j < cfg.frames; ++j) {
+        const rpr::Pose p = seq.pose(j);
+        rp_pose_lin_t pl;
+        rp_real pr[6];
+        for (int i = 0; i < 6; ++i) {
+            pr[i] = (rp_real)seq.truth(j)[i];
+        }
+        rp_pose_lin_set(&pl, pr);
+        for (int k = 0; k < rig.n_cams; ++k) {
+            const rp_rig_cam_t &rc = rig.cam[k];
+            double C[3], M[9];
+            for (int i = 0; i < 3; ++i) {
+                C[i] = p.d[i];
+                for (int l = 0; l < 3; ++l) {
+                    C[i] += p.R[3 * i + l] * rc.D[l];
+                }
+                for (int c = 0; c < 3; ++c) {
+                    M[3 * i + c] = 0.0;
+                    for (int l = 0; l < 3; ++l) {
+                        M[3 * i + c] += p.R[3 * i + l] * rc.R[3 * l + c];
+                    }
+                }
+            }
+            for (int v = 0; v < rays.h; v += 17) {
+                for (int u = 0; u < rays.w; u += 23) {
+                    const float *r = &rays.ray[((size_t)v * rays.w + u) * 3u];
+                    double dw[3], t, uh[3];
+                    for (int i = 0; i < 3; ++i) {
+                        dw[i] = M[3 * i] * r[0] + M[3 * i + 1] * r[1] + M[3 * i + 2] * r[2];
+                    }
+                    if (!seq.scene().intersect(C, dw, &t, uh)) {
+                        ++misses;
+                        continue;
+                    }
+                    rp_real Mw[3], uv[2];
+                    for (int i = 0; i < 3; ++i) {
+                        Mw[i] = (rp_real)(C[i] + t * dw[i]);
+                    }
+                    if (rp_rig_project(&rig, (uint8_t)k, &pl, Mw, uv, NULL, NULL) != RP_OK) {
+                        ++misses;
+                        continue;
+                    }
+                    worst = std::max(worst, std::hypot((double)uv[0] - u, (double)uv[1] - v));
+                    ++n;
+                }
+            }
+        }
+    }
+    std::printf("  %d pixel centres (6 cameras, 3 frames, distortion k1 -0.25): worst "
+                "reprojection %.2e px, %d misses\n", n, worst, misses);
+    check(misses == 0 && n > 0, "every pixel's ray hits the surface");
+    check(worst < 1e-4, "surface hits project back onto their pixel centres (< 1e-4 px)");
+}
+
+/* A painted spot's image centroid against rp_rig_project of its centre. */
+static void test_marker(const double dist[5], const char *label)
+{
+    rpr::SeqCfg cfg = small_cfg(5);
+    for (int i = 0; i < 5; ++i) {
+        cfg.dist[i] = dist[i];
+    }
+    rpr::Sequence seq(cfg); /* for the rig and the trajectory */
+    const rp_rig_t &rig = seq.rig();
+    const uint32_t j = 2;
+    const rpr::Pose p = seq.pose(j);
+    rp_pose_lin_t pl;
+    rp_real pr[6];
+    for (int i = 0; i < 6; ++i) {
+        pr[i] = (rp_real)seq.truth(j)[i];
+    }
+    rp_pose_lin_set(&pl, pr);
+
+    /* One spot per camera, off the optical axis (so distortion matters): the direction from
+     * the origin to a point 0.8 m along the camera's ray through normalised (0.25, -0.15). */
+    rpr::SceneCfg sc;
+    sc.plain = true;
+    sc.face_px = 1024;
+    sc.r_amp = 0.1665;
+    sc.seed = 11;
+    for (int k = 0; k < rig.n_cams; ++k) {
+        const rp_rig_cam_t &rc = rig.cam[k];
+        const double dc[3] = {0.25, -0.15, 1.0};
+        rpr::Marker mk;
+        for (int i = 0; i < 3; ++i) {
+            double C = p.d[i], dw = 0.0;
+            for (int l = 0; l < 3; ++l) {
+                C += p.R[3 * i + l] * rc.D[l];
+                double Ml = 0.0;
+                for (int c = 0; c < 3; ++c) {
+                    Ml += rc.R[3 * l + c] * dc[c];
+                }
+                dw += p.R[3 * i + l] * Ml;
+            }
+            mk.u[i] = C + 0.8 * dw;
+        }
+        mk.sigma_rad = 0.006;
+        mk.amp = 0.6;
+        sc.markers.push_back(mk);
+    }
+    rpr::Scene scene(sc);
+    rpr::CamRays rays;
+    rpr::make_rays(rig.cam[0].cam, 4, &rays);
+    double worst = 0.0;
+    bool all = true;
+    for (int k = 0; k < rig.n_cams; ++k) {
+        double M[3];
+        scene.surface_point(sc.markers[k].u, M);
+        const rp_real Mr[3] = {(rp_real)M[0], (rp_real)M[1], (rp_real)M[2]};
+        rp_real uv[2];
+        all = all && rp_rig_project(&rig, (uint8_t)k, &pl, Mr, uv, NULL, NULL) == RP_OK;
+        cv::Mat img;
+        rpr::render_albedo(scene, rig, k, p.d, p.R, rays, &img);
+        const int u0 = (int)std::lround((double)uv[0]), v0 = (int)std::lround((double)uv[1]);
+        double sw = 0.0, su = 0.0, sv = 0.0;
+        for (int v = v0 - 14; v <= v0 + 14; ++v) {
+            for (int u = u0 - 14; u <= u0 + 14; ++u) {
+                if (u < 0 || v < 0 || u >= img.cols || v >= img.rows) {
+                    all = false;
+                    continue;
+                }
+                const double w = std::max(0.0, (double)img.at<float>(v, u) - 0.2);
+                sw += w;
+                su += w * u;
+                sv += w * v;
+            }
+        }
+        const double e = sw > 0.0 ? std::hypot(su / sw - (double)uv[0], sv / sw - (double)uv[1])
+                                   : 1e9;
+        worst = std::max(worst, e);
+    }
+    std::printf("  spots, %s: worst centroid - projection %.4f px (6 cameras, 320x240)\n", label,
+                worst);
+    check(all && worst < 0.05, "rendered spots land where rp_camera projects them (< 0.05 px)");
+}
+
+static void test_depths()
+{
+    rpr::SceneCfg sc;
+    sc.face_px = 64;
+    sc.seed = 2;
+    rpr::Scene scene(sc);
+    double lo = 1e9, hi = 0.0;
+    for (int i = 0; i < 20000; ++i) { /* a Fibonacci sphere of directions */
+        const double z = 1.0 - (i + 0.5) / 10000.0, ph = i * 2.399963229728653;
+        const double rho = std::sqrt(1.0 - z * z);
+        const double u[3] = {rho * std::cos(ph), rho * std::sin(ph), z};
+        const double r = scene.radius(u);
+        lo = std::min(lo, r);
+        hi = std::max(hi, r);
+    }
+    std::printf("  shell radii %.3f..%.3f m (simulation: 0.667..1)\n", lo, hi);
+    check(lo >= 0.667 - 1e-6 && hi <= 1.0 + 1e-6 && hi - lo > 0.15,
+          "surface radii inside the simulation's shell, spanning it");
+}
+
+int main()
+{
+    test_determinism();
+    test_ray_consistency();
+    const double none[5] = {0, 0, 0, 0, 0}, barrel[5] = {-0.25, 0.08, 1e-3, -5e-4, 0};
+    test_marker(none, "pinhole");
+    test_marker(barrel, "k1 -0.25 k2 0.08 p1 1e-3 p2 -5e-4");
+    test_depths();
+    if (n_fail == 0) {
+        std::printf("[  PASSED  ] %d test(s).\n", n_pass);
+        return 0;
+    }
+    std::printf("[  FAILED  ] %d test(s), %d passed.\n", n_fail, n_pass);
+    return 1;
+}
