@@ -2,14 +2,17 @@
  * rp_smatch.h - left-right matching of a stereo pair's features from the images, under the
  * pair's fixed geometry (issue 4 item 2).
  *
- * For each feature of camera a (the "left" one) the matcher walks the epipolar curve of its
- * pixel in camera b's image: the ray of the pixel (undistorted through camera a) is cut at
- * inverse depths from 1 / min_depth_m to 1 / max_depth_m, each point projected (with
- * distortion) into camera b, so the walk follows the true (curved) epipolar line of distorted
- * images in steps of about one pixel. At each step a patch score compares the windows
- * (ZNCC, integer sums, Q15 result):
- *   1. best score >= min_zncc_q15, and the best score elsewhere on the curve (farther than
- *      2 steps from the best) lower by at least uniq_margin_q15 (uniqueness);
+ * The matcher reads the images as pyramids (rp_pyr_t, rp_pyr_build: the trackers hold them).
+ * For each feature of camera a (the "left" one) it walks the epipolar curve of its pixel in
+ * camera b's image: the ray of the pixel (undistorted through camera a) is cut at inverse
+ * depths from 1 / min_depth_m to 1 / max_depth_m, the points projected (with distortion) into
+ * camera b, so the walk follows the true (curved) epipolar line of distorted images. A patch
+ * score compares the windows (ZNCC: integer sums of Q5 grey levels, Q15 result):
+ *   0. coarse: at pyramid level search_level, one step per level pixel, window half side
+ *      half_win - 1 (at least 2); fine: at level 0, one step per pixel around the coarse best,
+ *      window half side half_win, the template sampled at the feature's sub-pixel position;
+ *   1. best fine score >= min_zncc_q15, and the best other local maximum of the coarse scores
+ *      (farther than 2 steps from the best) lower by at least uniq_margin_q15 (uniqueness);
  *   2. left-right consistency: the same search from the right pixel back along its epipolar
  *      curve in camera a must land within lr_max_px of the left feature;
  *   3. sub-pixel: parabola through the scores around the best step, then a 1-D Lucas-Kanade
@@ -50,12 +53,14 @@ typedef struct {
     rp_real lr_max_px;        /* left-right consistency tolerance, px (1.0) */
     rp_real max_epipolar_px;  /* final epipolar check, px (1.0) */
     uint8_t subpix_iter;      /* 1-D LK iterations after the parabola fit, 0 = parabola only (5) */
+    uint8_t search_level;     /* pyramid level of the coarse search (1; 0 = full resolution;
+                               * clipped to the pyramids' levels) */
 } rp_smatch_cfg_t;
 
 /* Counts of one rp_smatch_pair call: every input feature ends in exactly one bucket. */
 typedef struct {
     uint16_t n_in;        /* features of camera a offered */
-    uint16_t n_matched;   /* matched (written out) */
+    uint16_t n_matched;   /* matched (written out, unless past the cap: RP_E_FULL) */
     uint16_t n_outside;   /* epipolar curve (within the depth range) misses camera b's image,
                            * or the feature's window leaves camera a's image */
     uint16_t n_flat;      /* left patch without texture (min_std) */
@@ -78,26 +83,26 @@ typedef struct {
 } rp_smatch_t;
 
 /* Defaults: 9x9 window, ZNCC >= 0.8, margin 0.05, std >= 4, depths 0.2 .. 100 m, left-right
- * 1 px, epipolar 1 px, 5 LK iterations. RP_E_ARG if cfg is NULL. */
+ * 1 px, epipolar 1 px, 5 LK iterations, coarse search at level 1. RP_E_ARG if cfg is NULL. */
 rp_status_t rp_smatch_default_cfg(rp_smatch_cfg_t *cfg);
 
 /* Resets sm with cfg (copied). RP_E_ARG: NULL, or a value out of range (half_win outside
  * 2..7, scores outside 0..32767, depths not 0 < min < max, tolerances not > 0). */
 rp_status_t rp_smatch_init(rp_smatch_t *sm, const rp_smatch_cfg_t *cfg);
 
-/* Match the n_a features fa of camera sp->a (image img_a) into camera sp->b's image img_b.
+/* Match the n_a features fa of camera sp->a (image pyramid pyr_a) into camera sp->b's image
+ * (pyramid pyr_b).
  * Matches go to fb (at most cap, *n_b of them), in the order of fa, each with its fa id and its
  * pixel in camera b. stats (may be NULL) receives the counts.
  * Returns:
  *   RP_OK           done (*n_b may be 0: nothing matched)
- *   RP_E_ARG        NULL pointer; image malformed (truncated, stride < w) or of another size
- *                   than the rig's calibration of its camera; image smaller than the window;
- *                   sp not a pair of rig's cameras; nothing written
- *   RP_E_DEGENERATE an image is blank (no contrast): nothing matched
+ *   RP_E_ARG        NULL pointer; a pyramid without levels or whose level 0 is not the size
+ *                   of the rig's calibration of its camera; sp not a pair of the rig's cameras
+ *                   (nothing written)
  *   RP_E_NAN        a feature of fa is not finite (it is skipped, the others are matched)
  *   RP_E_FULL       more matches than cap: the first cap written */
 rp_status_t rp_smatch_pair(rp_smatch_t *sm, const rp_rig_t *rig, const rp_stereo_pair_t *sp,
-                           const rp_image_t *img_a, const rp_image_t *img_b,
+                           const rp_pyr_t *pyr_a, const rp_pyr_t *pyr_b,
                            const rp_feat_t *fa, uint16_t n_a, rp_feat_t *fb, uint16_t cap,
                            uint16_t *n_b, rp_smatch_stats_t *stats);
 
