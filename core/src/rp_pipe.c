@@ -1,0 +1,439 @@
+/*
+ * rp_pipe.c - the image pipeline: trackers per camera, stereo matching of new features, the
+ * layout's estimator (rp_pipe.h has the data flow and the id scheme of stereo pairs).
+ *
+ * Second cameras of stereo pairs run an rp_tracker_t that is fed, not detecting: after every
+ * rp_track_process the pipeline keeps only the features it handed over (ids of the pair's first
+ * camera, id % RP_MAX_CAMS == that camera, rp_track.h's id scheme) and appends each new match
+ * to the tracker's list at its matched position. (rp_track.h has no call to hand features to a
+ * tracker yet: this reads and writes rp_tracker_t's documented fields n, id, pos_q16.)
+ */
+#include "rigpose/rp_pipe.h"
+
+#include <stddef.h>
+#include <string.h>
+
+#include "priv/rp_math.h"
+
+#define RP_PIPE_MAGIC 0x50495045u /* "PIPE" */
+
+static const char *const layout_names[RP_PIPE_LAYOUT_COUNT_] = {
+    "stereo4", "stereo2", "gc", "cam1", "cam2", "cam3", "cam4", "rc"};
+
+const char *rp_pipe_layout_name(rp_pipe_layout_t layout)
+{
+    return (unsigned)layout < RP_PIPE_LAYOUT_COUNT_ ? layout_names[layout] : "?";
+}
+
+rp_status_t rp_pipe_layout_from_name(const char *name, rp_pipe_layout_t *layout)
+{
+    if (name == NULL || layout == NULL) {
+        return RP_E_ARG;
+    }
+    for (unsigned i = 0; i < RP_PIPE_LAYOUT_COUNT_; ++i) {
+        if (strcmp(name, layout_names[i]) == 0) {
+            *layout = (rp_pipe_layout_t)i;
+            return RP_OK;
+        }
+    }
+    return RP_E_ARG;
+}
+
+static int is_stereo(rp_pipe_layout_t l) { return l == RP_PIPE_STEREO4 || l == RP_PIPE_STEREO2; }
+
+static int is_single(rp_pipe_layout_t l) { return l >= RP_PIPE_CAM1 && l <= RP_PIPE_CAM4; }
+
+rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg)
+{
+    if (cfg == NULL || (unsigned)layout >= RP_PIPE_LAYOUT_COUNT_) {
+        return RP_E_ARG;
+    }
+    memset(cfg, 0, sizeof(*cfg));
+    cfg->layout = layout;
+    (void)rp_track_default_cfg(&cfg->track);
+    (void)rp_smatch_default_cfg(&cfg->smatch);
+    cfg->stereo = rp_vo_stereo_default_cfg();
+    cfg->stereo.n_pairs = layout == RP_PIPE_STEREO4 ? 2 : 1;
+    cfg->stereo.pair_a[0] = 0; /* cam1 */
+    cfg->stereo.pair_b[0] = 4; /* cam1's partner */
+#if RP_MAX_PAIRS > 1
+    cfg->stereo.pair_a[1] = 2; /* cam3 */
+    cfg->stereo.pair_b[1] = 5; /* cam3's partner */
+#endif
+    cfg->gc = rp_vo_gc_default_cfg();
+    cfg->gc.n_cams = 4;
+    cfg->mono = rp_vo_mono_default_cfg();
+    cfg->mono.cam = is_single(layout) ? (uint8_t)(layout - RP_PIPE_CAM1) : 0;
+    for (uint8_t i = 0; i < 4; ++i) {
+        cfg->gc.cams[i] = i;
+        cfg->rc_cams[i] = i;
+    }
+    cfg->rc = rp_rc_default_params();
+    return RP_OK;
+}
+
+/* ---- set-up ------------------------------------------------------------------------------- */
+
+static rp_status_t add_tracker(rp_pipe_t *pipe, uint8_t cam, uint8_t right)
+{
+    if (cam >= pipe->rig->n_cams || pipe->cam_trk[cam] >= 0 ||
+        pipe->n_trk >= RP_PIPE_MAX_TRACKERS) {
+        return RP_E_ARG;
+    }
+    const rp_camera_t *c = &pipe->rig->cam[cam].cam;
+    if (c->width > RP_TRACK_MAX_W || c->height > RP_TRACK_MAX_H) {
+        return RP_E_ARG;
+    }
+    rp_track_cfg_t tc = pipe->cfg.track;
+    tc.cam = cam;
+    if (right) {
+        /* never tops up; on an empty list it detects one feature, which is dropped */
+        tc.target = 1;
+        tc.topup_below = 0;
+    }
+    const rp_status_t st = rp_track_init(&pipe->trk[pipe->n_trk], &tc);
+    if (st != RP_OK) {
+        return st;
+    }
+    pipe->trk_cam[pipe->n_trk] = cam;
+    pipe->trk_right[pipe->n_trk] = right;
+    pipe->cam_trk[cam] = (int8_t)pipe->n_trk;
+    pipe->n_trk++;
+    return RP_OK;
+}
+
+static rp_status_t init_trackers(rp_pipe_t *pipe)
+{
+    const rp_pipe_cfg_t *cfg = &pipe->cfg;
+    rp_status_t st = RP_OK;
+    if (is_stereo(cfg->layout)) {
+        const uint8_t want = cfg->layout == RP_PIPE_STEREO4 ? 2 : 1;
+        if (cfg->stereo.n_pairs != want || want > RP_MAX_PAIRS) {
+            return RP_E_ARG;
+        }
+        for (uint8_t k = 0; k < want && st == RP_OK; ++k) {
+            st = add_tracker(pipe, cfg->stereo.pair_a[k], 0);
+            if (st == RP_OK) {
+                st = add_tracker(pipe, cfg->stereo.pair_b[k], 1);
+            }
+            if (st == RP_OK) {
+                st = rp_stereo_pair_init(pipe->rig, cfg->stereo.pair_a[k],
+                                         cfg->stereo.pair_b[k], &pipe->pair[k]);
+            }
+        }
+    } else if (cfg->layout == RP_PIPE_GC) {
+        if (cfg->gc.n_cams < 1 || cfg->gc.n_cams > RP_PIPE_MAX_TRACKERS) {
+            return RP_E_ARG;
+        }
+        for (uint8_t i = 0; i < cfg->gc.n_cams && st == RP_OK; ++i) {
+            st = add_tracker(pipe, cfg->gc.cams[i], 0);
+        }
+    } else if (is_single(cfg->layout)) {
+        st = add_tracker(pipe, cfg->mono.cam, 0);
+    } else {
+        if (RP_RC_MAX_CAMS > RP_PIPE_MAX_TRACKERS) {
+            return RP_E_ARG;
+        }
+        for (uint8_t i = 0; i < RP_RC_MAX_CAMS && st == RP_OK; ++i) {
+            st = add_tracker(pipe, cfg->rc_cams[i], 0);
+        }
+    }
+    return st;
+}
+
+static rp_status_t init_estimator(rp_pipe_t *pipe)
+{
+    const rp_pipe_cfg_t *cfg = &pipe->cfg;
+    if (is_stereo(cfg->layout)) {
+        return rp_vo_stereo_init(&pipe->est.stereo, pipe->rig, &cfg->stereo);
+    }
+    if (cfg->layout == RP_PIPE_GC) {
+        return rp_vo_gc_init(&pipe->est.gc, pipe->rig, &cfg->gc);
+    }
+    if (is_single(cfg->layout)) {
+        return rp_vo_mono_init(&pipe->est.single.mono[0], pipe->rig, &cfg->mono);
+    }
+    for (uint8_t i = 0; i < RP_RC_MAX_CAMS; ++i) {
+        rp_vo_mono_cfg_t mc = cfg->mono;
+        mc.cam = cfg->rc_cams[i];
+        const rp_status_t st = rp_vo_mono_init(&pipe->est.single.mono[i], pipe->rig, &mc);
+        if (st != RP_OK) {
+            return st;
+        }
+    }
+    pipe->est.single.last_scale = RP_C(1.0);
+    return RP_OK;
+}
+
+rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg_t *cfg)
+{
+    if (pipe == NULL) {
+        return RP_E_ARG;
+    }
+    pipe->magic = 0;
+    if (rig == NULL || cfg == NULL || (unsigned)cfg->layout >= RP_PIPE_LAYOUT_COUNT_) {
+        return RP_E_ARG;
+    }
+    rp_status_t st = rp_rig_check(rig);
+    if (st != RP_OK) {
+        return st;
+    }
+    pipe->rig = rig;
+    pipe->cfg = *cfg;
+    pipe->n_trk = 0;
+    for (int k = 0; k < RP_MAX_CAMS; ++k) {
+        pipe->cam_trk[k] = -1;
+    }
+    st = init_trackers(pipe);
+    if (st == RP_OK) {
+        st = rp_smatch_init(&pipe->sm, &cfg->smatch);
+    }
+    if (st == RP_OK) {
+        st = init_estimator(pipe);
+    }
+    if (st != RP_OK) {
+        return st;
+    }
+    memset(&pipe->fs, 0, sizeof(pipe->fs));
+    memset(&pipe->last, 0, sizeof(pipe->last));
+    memset(&pipe->info, 0, sizeof(pipe->info));
+    pipe->last_utime = 0;
+    pipe->magic = RP_PIPE_MAGIC;
+    return RP_OK;
+}
+
+/* ---- second cameras of pairs ---------------------------------------------------------------- */
+
+/* Keeps only the tracker's features whose id comes from camera `owner` (the pair's first). */
+static void trk_keep_owner(rp_tracker_t *trk, uint8_t owner)
+{
+    uint16_t m = 0;
+    for (uint16_t i = 0; i < trk->n; ++i) {
+        if (trk->id[i] % RP_MAX_CAMS == owner) {
+            trk->id[m] = trk->id[i];
+            trk->pos_q16[m][0] = trk->pos_q16[i][0];
+            trk->pos_q16[m][1] = trk->pos_q16[i][1];
+            ++m;
+        }
+    }
+    trk->n = m;
+}
+
+/* Hands feature f (matched in this tracker's current image) to the tracker. 0 if full. */
+static int trk_add(rp_tracker_t *trk, const rp_feat_t *f)
+{
+    if (trk->n >= RP_MAX_FEATS_PER_CAM) {
+        return 0;
+    }
+    trk->id[trk->n] = f->id;
+    trk->pos_q16[trk->n][0] = (int32_t)rp_floor(f->uv[0] * RP_C(65536.0) + RP_C(0.5));
+    trk->pos_q16[trk->n][1] = (int32_t)rp_floor(f->uv[1] * RP_C(65536.0) + RP_C(0.5));
+    trk->n++;
+    return 1;
+}
+
+/* The tracker's features as rp_feat_t (as rp_track_process writes them). */
+static uint16_t trk_export(const rp_tracker_t *trk, rp_feat_t *out)
+{
+    for (uint16_t i = 0; i < trk->n; ++i) {
+        out[i].id = trk->id[i];
+        out[i].uv[0] = (rp_real)trk->pos_q16[i][0] / RP_C(65536.0);
+        out[i].uv[1] = (rp_real)trk->pos_q16[i][1] / RP_C(65536.0);
+    }
+    return trk->n;
+}
+
+static int image_taken(uint8_t state)
+{
+    return state == RP_PIPE_CAM_OK || state == RP_PIPE_CAM_NO_FEATURES;
+}
+
+/* Matches pair k's features born this step (left camera) into the right image and hands the
+ * matches to the right tracker and the frame set. */
+static void match_new(rp_pipe_t *pipe, uint8_t k)
+{
+    const rp_stereo_pair_t *sp = &pipe->pair[k];
+    const int ta = pipe->cam_trk[sp->a], tb = pipe->cam_trk[sp->b];
+    rp_pipe_info_t *info = &pipe->info;
+    if (!image_taken(info->cam_state[sp->a]) || !image_taken(info->cam_state[sp->b])) {
+        return;
+    }
+    rp_tracker_t *A = &pipe->trk[ta], *B = &pipe->trk[tb];
+    uint16_t n_new = 0;
+    for (uint16_t i = 0; i < pipe->fs.n[sp->a]; ++i) {
+        const rp_feat_t *f = &pipe->fs.f[sp->a][i];
+        if (f->id / RP_MAX_CAMS >= pipe->born_k[ta]) {
+            pipe->scratch_a[n_new++] = *f;
+        }
+    }
+    if (n_new == 0) {
+        return;
+    }
+    uint16_t nb = 0;
+    (void)rp_smatch_pair(&pipe->sm, pipe->rig, sp, &A->pyr[A->cur], &B->pyr[B->cur],
+                         pipe->scratch_a, n_new, pipe->scratch_b, RP_MAX_FEATS_PER_CAM, &nb,
+                         &info->match[k]);
+    for (uint16_t i = 0; i < nb && trk_add(B, &pipe->scratch_b[i]); ++i) {
+    }
+    pipe->fs.n[sp->b] = trk_export(B, pipe->fs.f[sp->b]);
+}
+
+/* ---- the step ------------------------------------------------------------------------------- */
+
+/* Runs tracker t on its camera's image (or notes why there is none). */
+static void track_one(rp_pipe_t *pipe, uint8_t t, const rp_image_t *img, int64_t utime)
+{
+    const uint8_t cam = pipe->trk_cam[t];
+    rp_tracker_t *trk = &pipe->trk[t];
+    rp_pipe_info_t *info = &pipe->info;
+    const rp_camera_t *c = &pipe->rig->cam[cam].cam;
+    pipe->born_k[t] = trk->next_k;
+    pipe->fs.n[cam] = 0;
+    if (img == NULL || img->data == NULL) {
+        info->cam_state[cam] = RP_PIPE_CAM_MISSING;
+        info->cam_status[cam] = RP_E_ARG;
+        return;
+    }
+    if (img->w != c->width || img->h != c->height) {
+        info->cam_state[cam] = RP_PIPE_CAM_BAD_IMAGE;
+        info->cam_status[cam] = RP_E_ARG;
+        return;
+    }
+    uint16_t n = 0;
+    rp_status_t st = rp_track_process(trk, img, utime, pipe->fs.f[cam], RP_MAX_FEATS_PER_CAM,
+                                      &n, &info->track[cam]);
+    info->cam_status[cam] = st;
+    if (st == RP_E_DEGENERATE) {
+        info->cam_state[cam] = RP_PIPE_CAM_BLANK;
+        return;
+    }
+    if (st != RP_OK && st != RP_E_TOO_FEW && st != RP_E_FULL) {
+        info->cam_state[cam] = RP_PIPE_CAM_BAD_IMAGE;
+        return;
+    }
+    if (pipe->trk_right[t]) {
+        /* the pair's first camera is the one whose tracker precedes this one */
+        trk_keep_owner(trk, pipe->trk_cam[t - 1]);
+        n = trk_export(trk, pipe->fs.f[cam]);
+    }
+    pipe->fs.n[cam] = n;
+    info->cam_state[cam] = n > 0 ? RP_PIPE_CAM_OK : RP_PIPE_CAM_NO_FEATURES;
+}
+
+/* rc: the four cameras' own estimators fused by the rigidity constraints (rp_rc.h); a
+ * degenerate frame keeps the last accepted scale. */
+static rp_status_t rc_step(rp_pipe_t *pipe, rp_estimate_t *est)
+{
+    rp_real p_own[RP_RC_MAX_CAMS][6];
+    rp_status_t st_ref = RP_OK;
+    for (uint8_t i = 0; i < RP_RC_MAX_CAMS; ++i) {
+        rp_estimate_t rig_est, own;
+        const rp_status_t st = rp_vo_mono_step(&pipe->est.single.mono[i], &pipe->fs, &rig_est,
+                                               &own);
+        if (i == 0) {
+            st_ref = st;
+            *est = own; /* the reference camera's own pose is the rig pose up to scale */
+        }
+        memcpy(p_own[i], own.p, sizeof(p_own[i]));
+    }
+    rp_real s[RP_RC_MAX_CAMS];
+    uint32_t flags = est->flags & ~(uint32_t)RP_EST_SCALE_WEAK;
+    if (rp_rc_fuse(pipe->rig, pipe->cfg.rc_cams, RP_RC_MAX_CAMS, (const rp_real(*)[6])p_own,
+                   &pipe->cfg.rc, pipe->est.single.last_scale, est->p, s, &flags) == RP_OK) {
+        pipe->est.single.last_scale = s[0];
+    }
+    est->flags = flags;
+    return st_ref;
+}
+
+static rp_status_t run_estimator(rp_pipe_t *pipe, rp_estimate_t *est)
+{
+    const rp_pipe_layout_t l = pipe->cfg.layout;
+    if (is_stereo(l)) {
+        return rp_vo_stereo_step(&pipe->est.stereo, &pipe->fs, est);
+    }
+    if (l == RP_PIPE_GC) {
+        return rp_vo_gc_step(&pipe->est.gc, &pipe->fs, est);
+    }
+    if (is_single(l)) {
+        return rp_vo_mono_step(&pipe->est.single.mono[0], &pipe->fs, est, NULL);
+    }
+    return rc_step(pipe, est);
+}
+
+rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
+                         int64_t utime, rp_estimate_t *est)
+{
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || images == NULL || est == NULL ||
+        n > RP_MAX_CAMS) {
+        if (est != NULL) {
+            memset(est, 0, sizeof(*est));
+            est->flags = RP_EST_LOST;
+        }
+        return RP_E_ARG;
+    }
+    if (pipe->info.frame > 0 && utime <= pipe->last_utime) {
+        *est = pipe->last;
+        est->flags |= RP_EST_LOST;
+        return RP_E_RANGE;
+    }
+    rp_pipe_info_t *info = &pipe->info;
+    const uint32_t frame = info->frame;
+    memset(info, 0, sizeof(*info));
+    info->frame = frame + 1;
+    pipe->last_utime = utime;
+    memset(pipe->fs.n, 0, sizeof(pipe->fs.n));
+    pipe->fs.utime = utime;
+
+    uint8_t taken = 0, lacking = 0;
+    for (uint8_t t = 0; t < pipe->n_trk; ++t) {
+        const uint8_t cam = pipe->trk_cam[t];
+        track_one(pipe, t, cam < n ? images[cam] : NULL, utime);
+    }
+    if (is_stereo(pipe->cfg.layout)) {
+        for (uint8_t k = 0; k < pipe->cfg.stereo.n_pairs; ++k) {
+            match_new(pipe, k);
+            const uint8_t b = pipe->pair[k].b;
+            if (info->cam_state[b] == RP_PIPE_CAM_NO_FEATURES && pipe->fs.n[b] > 0) {
+                info->cam_state[b] = RP_PIPE_CAM_OK;
+            }
+        }
+    }
+    for (uint8_t t = 0; t < pipe->n_trk; ++t) {
+        const uint8_t s = info->cam_state[pipe->trk_cam[t]];
+        taken = (uint8_t)(taken + image_taken(s));
+        lacking = (uint8_t)(lacking + (s != RP_PIPE_CAM_OK));
+    }
+    if (taken == 0) {
+        *est = pipe->last;
+        est->utime = utime;
+        est->flags |= RP_EST_LOST | RP_EST_DEGRADED;
+        info->est_status = RP_OK;
+        return RP_E_DEGENERATE;
+    }
+    const rp_status_t st = run_estimator(pipe, est);
+    if (lacking > 0) {
+        est->flags |= RP_EST_DEGRADED;
+    }
+    info->est_status = st;
+    pipe->last = *est;
+    return st;
+}
+
+rp_status_t rp_pipe_frameset(const rp_pipe_t *pipe, const rp_frameset_t **fs)
+{
+    if (pipe == NULL || fs == NULL || pipe->magic != RP_PIPE_MAGIC) {
+        return RP_E_ARG;
+    }
+    *fs = &pipe->fs;
+    return RP_OK;
+}
+
+rp_status_t rp_pipe_info(const rp_pipe_t *pipe, const rp_pipe_info_t **info)
+{
+    if (pipe == NULL || info == NULL || pipe->magic != RP_PIPE_MAGIC) {
+        return RP_E_ARG;
+    }
+    *info = &pipe->info;
+    return RP_OK;
+}

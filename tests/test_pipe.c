@@ -1,0 +1,347 @@
+/*
+ * test_pipe.c - the image pipeline (rp_pipe.h): rendered frames of the paper's six-camera rig
+ * (320x240, f = 400 px) moving through a textured room (img_fixture.h) go through trackers,
+ * stereo matching and the estimators; the pose follows the known motion for stereo4, stereo2
+ * and gc; pairs share ids; a missing, blank, truncated or wrongly sized image degrades the step
+ * with its state instead of failing it; bad calls give their status.
+ */
+#include <string.h>
+#include <time.h>
+
+#include "rp_test.h"
+
+#include "img_fixture.h"
+#include "rigpose/rp_pipe.h"
+
+#define W 320
+#define H 240
+#define NCAM RP_SIM_NCAMS
+#define NFRAMES 8
+#define DT_US 33333
+
+static rp_rig_t rig;
+static uint8_t frames[NFRAMES][NCAM][W * H];
+static rp_real truth[NFRAMES][6];
+static rp_pipe_t pipe;
+static int rendered = 0;
+
+/* The motion: constant velocity, per frame (4, -2, 6) mm and (4, 6, -3) mrad. */
+static void pose_at(int j, rp_real p[6])
+{
+    static const double step[6] = {0.004, -0.002, 0.006, 0.004, 0.006, -0.003};
+    for (int i = 0; i < 6; ++i) {
+        p[i] = (rp_real)(step[i] * j);
+    }
+}
+
+static int setup_frames(void **state)
+{
+    (void)state;
+    rp_sim_cfg_t sc;
+    rp_sim_default_cfg(&sc);
+    sc.width = W;
+    sc.height = H;
+    sc.focal_px = 400.0;
+    rp_sim_make_rig(&sc, &rig);
+    if (rendered) {
+        return 0;
+    }
+    const fx_room_t rm = fx_room_default();
+    uint64_t rs = 1234;
+    for (int j = 0; j < NFRAMES; ++j) {
+        pose_at(j, truth[j]);
+        for (int k = 0; k < NCAM; ++k) {
+            fx_render(&rig, k, truth[j], &rm, frames[j][k], 2.0, &rs);
+        }
+    }
+    rendered = 1;
+    return 0;
+}
+
+typedef struct {
+    double t_err, a_err; /* mean over frames 1.. of max |translation| (m) and |angle| (rad) */
+    double t_last, a_last;
+    double us_per_step;
+    int n_ok;
+} run_t;
+
+/* Runs the pipeline over the frames; drop_cam >= 0 withholds that camera at frame drop_at. */
+static run_t run_layout(rp_pipe_layout_t layout, int nframes, int drop_cam, int drop_at)
+{
+    rp_pipe_cfg_t cfg;
+    assert_ok(rp_pipe_default_cfg(layout, &cfg));
+    cfg.gc.init_depth_m = RP_C(1.2); /* the room's typical range */
+    cfg.gc.init_depth_sigma_m = RP_C(0.3);
+    cfg.gc.init_on_sphere = 1;
+    cfg.mono.init_depth_m = RP_C(1.2);
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    run_t r;
+    memset(&r, 0, sizeof(r));
+    double us = 0;
+    for (int j = 0; j < nframes; ++j) {
+        rp_image_t im[NCAM];
+        const rp_image_t *ptr[NCAM];
+        for (int k = 0; k < NCAM; ++k) {
+            im[k] = fx_image(frames[j][k], W, H);
+            ptr[k] = (k == drop_cam && j == drop_at) ? NULL : &im[k];
+        }
+        rp_estimate_t est;
+        const clock_t t0 = clock();
+        const rp_status_t st = rp_pipe_step(&pipe, ptr, NCAM, (int64_t)j * DT_US, &est);
+        us += (double)(clock() - t0) / CLOCKS_PER_SEC * 1e6;
+        r.n_ok += st == RP_OK;
+        const rp_pipe_info_t *info;
+        assert_ok(rp_pipe_info(&pipe, &info));
+        assert_int_equal(info->frame, j + 1);
+        if (j == drop_at && drop_cam >= 0) {
+            assert_int_equal(info->cam_state[drop_cam], RP_PIPE_CAM_MISSING);
+            assert_true(est.flags & RP_EST_DEGRADED);
+        }
+        if (j == 0) {
+            assert_true(est.flags & RP_EST_INITIALISING);
+            continue;
+        }
+        double te = 0, ae = 0;
+        for (int i = 0; i < 3; ++i) {
+            te = fmax(te, fabs((double)(est.p[i] - truth[j][i])));
+            ae = fmax(ae, fabs((double)(est.p[3 + i] - truth[j][3 + i])));
+        }
+        r.t_err += te / (nframes - 1);
+        r.a_err += ae / (nframes - 1);
+        r.t_last = te;
+        r.a_last = ae;
+    }
+    r.us_per_step = us / nframes;
+    printf("  %s: %d/%d steps OK; mean error %.5f m %.5f rad, last frame %.5f m %.5f rad "
+           "(moved %.3f m); %.0f us per step (this build)\n",
+           rp_pipe_layout_name(layout), r.n_ok, nframes, r.t_err, r.a_err, r.t_last, r.a_last,
+           sqrt(pow((double)truth[nframes - 1][0], 2) + pow((double)truth[nframes - 1][1], 2) +
+                pow((double)truth[nframes - 1][2], 2)),
+           r.us_per_step);
+    return r;
+}
+
+/* Given the paper's two stereo pairs in the room, the pipeline tracks the motion to a few mm,
+ * also when a camera (cam3's partner) delivers no image for one frame set. */
+static void test_stereo4_tracks_motion(void **state)
+{
+    (void)state;
+    const run_t r = run_layout(RP_PIPE_STEREO4, NFRAMES, RP_SIM_CAM3B, 4);
+    assert_int_equal(r.n_ok, NFRAMES);
+    assert_true(r.t_err < 0.002);
+    assert_true(r.a_err < 0.002);
+}
+
+static void test_stereo2_tracks_motion(void **state)
+{
+    (void)state;
+    const run_t r = run_layout(RP_PIPE_STEREO2, NFRAMES, -1, -1);
+    assert_int_equal(r.n_ok, NFRAMES);
+    assert_true(r.t_err < 0.005);
+    assert_true(r.a_err < 0.005);
+}
+
+static void test_gc_tracks_motion(void **state)
+{
+    (void)state;
+    const run_t r = run_layout(RP_PIPE_GC, NFRAMES, -1, -1);
+    assert_int_equal(r.n_ok, NFRAMES);
+    assert_true(r.t_err < 0.01);
+    assert_true(r.a_err < 0.005);
+}
+
+/* cam1 alone and the rigidity constraints run end to end (a few frames: their accuracy is the
+ * simulator's business). */
+static void test_single_camera_and_rc_run(void **state)
+{
+    (void)state;
+    const run_t c1 = run_layout(RP_PIPE_CAM1, 4, -1, -1);
+    assert_int_equal(c1.n_ok, 4);
+    assert_true(c1.a_err < 0.05);
+    const run_t rc = run_layout(RP_PIPE_RC, 4, -1, -1);
+    assert_int_equal(rc.n_ok, 4);
+    assert_true(rc.a_err < 0.05);
+}
+
+/* The first frame set: the right camera of each pair carries only ids of its left camera, each
+ * on the epipolar line of its partner. */
+static void test_pairs_share_ids(void **state)
+{
+    (void)state;
+    rp_pipe_cfg_t cfg;
+    assert_ok(rp_pipe_default_cfg(RP_PIPE_STEREO4, &cfg));
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    const rp_frameset_t *fs;
+    assert_ok(rp_pipe_frameset(&pipe, &fs));
+    for (int k = 0; k < NCAM; ++k) {
+        assert_int_equal(fs->n[k], 0);
+    }
+    rp_image_t im[NCAM];
+    const rp_image_t *ptr[NCAM];
+    for (int k = 0; k < NCAM; ++k) {
+        im[k] = fx_image(frames[0][k], W, H);
+        ptr[k] = &im[k];
+    }
+    rp_estimate_t est;
+    assert_ok(rp_pipe_step(&pipe, ptr, NCAM, 0, &est));
+    const rp_pipe_info_t *info;
+    assert_ok(rp_pipe_info(&pipe, &info));
+    for (int p = 0; p < 2; ++p) {
+        const uint8_t a = cfg.stereo.pair_a[p], b = cfg.stereo.pair_b[p];
+        rp_stereo_pair_t sp;
+        assert_ok(rp_stereo_pair_init(&rig, a, b, &sp));
+        assert_true(fs->n[b] >= 60);
+        assert_int_equal(info->match[p].n_in, fs->n[a]);
+        assert_int_equal(info->match[p].n_matched, fs->n[b]);
+        double epi_max = 0;
+        for (uint16_t i = 0; i < fs->n[b]; ++i) {
+            const rp_feat_t *fb = &fs->f[b][i];
+            assert_int_equal(fb->id % RP_MAX_CAMS, a);
+            int found = 0;
+            for (uint16_t j = 0; j < fs->n[a] && !found; ++j) {
+                if (fs->f[a][j].id == fb->id) {
+                    rp_real d;
+                    assert_ok(rp_stereo_epipolar_px(&rig, &sp, fs->f[a][j].uv, fb->uv, &d));
+                    epi_max = fmax(epi_max, (double)d);
+                    found = 1;
+                }
+            }
+            assert_true(found);
+        }
+        printf("  pair %d (cams %u, %u): %u left features, %u matched, epipolar max %.4f px\n",
+               p, a, b, fs->n[a], fs->n[b], epi_max);
+        assert_true(epi_max < 0.1);
+    }
+    assert_true(est.n_landmarks >= 100);
+}
+
+/* Truncated, wrongly sized, blank images and a camera too small to track: each camera gets its
+ * state, the others go on; no usable image at all gives RP_E_DEGENERATE. */
+static void test_bad_images_give_states(void **state)
+{
+    (void)state;
+    rp_pipe_cfg_t cfg;
+    assert_ok(rp_pipe_default_cfg(RP_PIPE_GC, &cfg));
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    rp_image_t im[NCAM];
+    const rp_image_t *ptr[NCAM];
+    for (int k = 0; k < NCAM; ++k) {
+        im[k] = fx_image(frames[0][k], W, H);
+        ptr[k] = &im[k];
+    }
+    static uint8_t blank[W * H];
+    memset(blank, 77, sizeof(blank));
+    im[1].size = W * H - 1;                 /* truncated */
+    im[2] = fx_image(frames[0][2], 160, 120); /* not the calibrated size */
+    im[3] = fx_image(blank, W, H);          /* blank */
+    rp_estimate_t est;
+    assert_ok(rp_pipe_step(&pipe, ptr, NCAM, 0, &est));
+    const rp_pipe_info_t *info;
+    assert_ok(rp_pipe_info(&pipe, &info));
+    assert_int_equal(info->cam_state[0], RP_PIPE_CAM_OK);
+    assert_int_equal(info->cam_state[1], RP_PIPE_CAM_BAD_IMAGE);
+    assert_int_equal(info->cam_state[2], RP_PIPE_CAM_BAD_IMAGE);
+    assert_int_equal(info->cam_state[3], RP_PIPE_CAM_BLANK);
+    assert_int_equal(info->cam_state[4], RP_PIPE_CAM_UNUSED);
+    assert_true(est.flags & RP_EST_DEGRADED);
+    /* fewer images than cameras: the rest are missing */
+    assert_ok(rp_pipe_step(&pipe, ptr, 1, DT_US, &est));
+    assert_int_equal(info->cam_state[3], RP_PIPE_CAM_MISSING);
+    /* nothing usable */
+    const rp_image_t *none[NCAM] = {NULL, NULL, NULL, NULL, NULL, NULL};
+    assert_status(rp_pipe_step(&pipe, none, NCAM, 2 * DT_US, &est), RP_E_DEGENERATE);
+    assert_true(est.flags & RP_EST_LOST);
+    /* time must move forward */
+    assert_status(rp_pipe_step(&pipe, ptr, NCAM, 2 * DT_US, &est), RP_E_RANGE);
+    assert_true(est.flags & RP_EST_LOST);
+
+    /* a rig whose cameras are smaller than the tracker's window and pyramid */
+    static rp_rig_t tiny;
+    tiny = rig;
+    for (int k = 0; k < NCAM; ++k) {
+        tiny.cam[k].cam.width = 12;
+        tiny.cam[k].cam.height = 12;
+    }
+    static uint8_t small[12 * 12];
+    for (int i = 0; i < 144; ++i) {
+        small[i] = (uint8_t)(i * 37);
+    }
+    assert_ok(rp_pipe_init(&pipe, &tiny, &cfg));
+    for (int k = 0; k < NCAM; ++k) {
+        im[k] = fx_image(small, 12, 12);
+        ptr[k] = &im[k];
+    }
+    assert_status(rp_pipe_step(&pipe, ptr, NCAM, 0, &est), RP_E_DEGENERATE);
+    assert_ok(rp_pipe_info(&pipe, &info));
+    assert_int_equal(info->cam_state[0], RP_PIPE_CAM_BAD_IMAGE);
+    assert_int_equal(info->cam_status[0], RP_E_ARG);
+}
+
+static void test_bad_calls(void **state)
+{
+    (void)state;
+    rp_pipe_cfg_t cfg;
+    rp_pipe_layout_t l;
+    assert_status(rp_pipe_default_cfg(RP_PIPE_LAYOUT_COUNT_, &cfg), RP_E_ARG);
+    assert_status(rp_pipe_default_cfg(RP_PIPE_GC, NULL), RP_E_ARG);
+    for (int i = 0; i < RP_PIPE_LAYOUT_COUNT_; ++i) {
+        assert_ok(rp_pipe_layout_from_name(rp_pipe_layout_name((rp_pipe_layout_t)i), &l));
+        assert_int_equal(l, i);
+    }
+    assert_status(rp_pipe_layout_from_name("stereo3", &l), RP_E_ARG);
+    assert_status(rp_pipe_layout_from_name(NULL, &l), RP_E_ARG);
+    assert_string_equal(rp_pipe_layout_name(RP_PIPE_LAYOUT_COUNT_), "?");
+
+    assert_ok(rp_pipe_default_cfg(RP_PIPE_STEREO2, &cfg));
+    assert_status(rp_pipe_init(NULL, &rig, &cfg), RP_E_ARG);
+    assert_status(rp_pipe_init(&pipe, NULL, &cfg), RP_E_ARG);
+    assert_status(rp_pipe_init(&pipe, &rig, NULL), RP_E_ARG);
+    rp_pipe_cfg_t bad = cfg;
+    bad.stereo.pair_b[0] = 9; /* not a camera of the rig */
+    assert_status(rp_pipe_init(&pipe, &rig, &bad), RP_E_ARG);
+    bad = cfg;
+    bad.stereo.pair_b[0] = bad.stereo.pair_a[0]; /* a camera twice */
+    assert_status(rp_pipe_init(&pipe, &rig, &bad), RP_E_ARG);
+    bad = cfg;
+    bad.stereo.n_pairs = 2; /* stereo2 has one pair */
+    assert_status(rp_pipe_init(&pipe, &rig, &bad), RP_E_ARG);
+    bad = cfg;
+    bad.track.win = 4;
+    assert_status(rp_pipe_init(&pipe, &rig, &bad), RP_E_ARG);
+    assert_ok(rp_pipe_default_cfg(RP_PIPE_GC, &bad));
+    bad.gc.cams[3] = bad.gc.cams[0];
+    assert_status(rp_pipe_init(&pipe, &rig, &bad), RP_E_ARG);
+    static rp_rig_t big;
+    big = rig;
+    big.cam[0].cam.width = RP_TRACK_MAX_W + 2;
+    assert_status(rp_pipe_init(&pipe, &big, &cfg), RP_E_ARG);
+
+    /* a failed init leaves the pipe unusable, not half set up */
+    rp_estimate_t est;
+    const rp_image_t *ptr[NCAM] = {NULL, NULL, NULL, NULL, NULL, NULL};
+    assert_status(rp_pipe_step(&pipe, ptr, NCAM, 0, &est), RP_E_ARG);
+    assert_true(est.flags & RP_EST_LOST);
+    const rp_frameset_t *fs;
+    assert_status(rp_pipe_frameset(&pipe, &fs), RP_E_ARG);
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    assert_status(rp_pipe_step(NULL, ptr, NCAM, 0, &est), RP_E_ARG);
+    assert_status(rp_pipe_step(&pipe, NULL, NCAM, 0, &est), RP_E_ARG);
+    assert_status(rp_pipe_step(&pipe, ptr, NCAM, 0, NULL), RP_E_ARG);
+    assert_status(rp_pipe_step(&pipe, ptr, RP_MAX_CAMS + 1, 0, &est), RP_E_ARG);
+    assert_status(rp_pipe_frameset(&pipe, NULL), RP_E_ARG);
+    assert_status(rp_pipe_info(NULL, NULL), RP_E_ARG);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_pairs_share_ids),
+        cmocka_unit_test(test_stereo4_tracks_motion),
+        cmocka_unit_test(test_stereo2_tracks_motion),
+        cmocka_unit_test(test_gc_tracks_motion),
+        cmocka_unit_test(test_single_camera_and_rc_run),
+        cmocka_unit_test(test_bad_images_give_states),
+        cmocka_unit_test(test_bad_calls),
+    };
+    return cmocka_run_group_tests(tests, setup_frames, NULL);
+}
