@@ -1,0 +1,103 @@
+/*
+ * rp_config.h - the rigpose configuration file (YAML, schema in config/README.md), read with
+ * Debian's libyaml (document API) into the structures the daemon runs on: the rig, the
+ * estimator's configuration, the HAL source's configuration, the tracker's and the LCM URL and
+ * channels.
+ *
+ * Not core code (it uses stdio and libyaml), but it keeps no heap after it returns: everything
+ * lands in the caller's rp_config_t.
+ *
+ * Every error is one line "FILE:LINE: KEY: what is wrong" (KEY is the path from the top, e.g.
+ * cameras[2].intrinsics); the first error found is reported and the load fails as a whole.
+ */
+#ifndef RP_CONFIG_H
+#define RP_CONFIG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rigpose/rp_hal.h"
+#include "rigpose/rp_rig.h"
+#include "rigpose/rp_track.h"
+#include "rigpose/rp_vo_gc.h"
+#include "rigpose/rp_vo_mono.h"
+#include "rigpose/rp_vo_stereo.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+    RP_CFG_OK = 0,
+    RP_CFG_E_ARG,     /* null pointer / no buffer */
+    RP_CFG_E_OPEN,    /* the file could not be read */
+    RP_CFG_E_SYNTAX,  /* not YAML, or not a mapping at the top */
+    RP_CFG_E_MISSING, /* a required key is absent */
+    RP_CFG_E_TYPE,    /* a value of the wrong type / shape (string for a number, 3 numbers for 4) */
+    RP_CFG_E_RANGE,   /* a value outside its allowed range, or inconsistent with others */
+    RP_CFG_E_UNKNOWN  /* a key the schema does not know */
+} rp_cfg_status_t;
+
+const char *rp_cfg_status_str(rp_cfg_status_t s);
+
+/* Estimators; the values are rigpose.pose_t's METHOD_* constants. */
+typedef enum {
+    RP_METHOD_STEREO4 = 0,
+    RP_METHOD_STEREO2 = 1,
+    RP_METHOD_GC = 2,
+    RP_METHOD_CAM1 = 3,
+    RP_METHOD_CAM2 = 4,
+    RP_METHOD_CAM3 = 5,
+    RP_METHOD_CAM4 = 6,
+    RP_METHOD_RC = 7
+} rp_method_t;
+
+const char *rp_method_name(rp_method_t m);
+
+#define RP_CFG_NAME_MAX 32     /* camera names, with the terminating NUL */
+#define RP_CFG_CHANNEL_MAX 64  /* LCM channel names, with the NUL */
+#define RP_CFG_URL_MAX 256     /* LCM URL, with the NUL */
+#define RP_CFG_ERR_MAX 512     /* a useful size for the error buffer */
+
+/* The feature-level simulation behind the sim source (source.sim in the file). */
+typedef struct {
+    uint32_t seed;      /* run seed */
+    uint32_t frames;    /* trajectory length, frame sets; 0: as the daemon asks */
+    double noise_px;    /* Gaussian pixel noise, px */
+    int16_t drop_cam;   /* camera that vanishes, -1: none */
+    uint32_t drop_from; /* from this frame set on */
+} rp_cfg_sim_t;
+
+typedef struct {
+    char path[RP_HAL_PATH_MAX];            /* the file read */
+    rp_rig_t rig;
+    char cam_name[RP_MAX_CAMS][RP_CFG_NAME_MAX];
+    rp_hal_cfg_t hal;                      /* kind, cameras, timeouts, sim seed/frames */
+    rp_cfg_sim_t sim;
+    rp_method_t method;
+    rp_vo_stereo_cfg_t stereo;             /* stereo4 / stereo2 */
+    rp_vo_gc_cfg_t gc;                     /* gc */
+    rp_vo_mono_cfg_t mono[4];              /* cam1..cam4 (mono[0]) and rc (the four cameras) */
+    uint8_t n_mono;
+    rp_track_cfg_t track;                  /* per camera: .cam is set by the user of the config */
+    char lcm_url[RP_CFG_URL_MAX];
+    char pose_channel[RP_CFG_CHANNEL_MAX];
+    char status_channel[RP_CFG_CHANNEL_MAX];
+    char image_channel[RP_CFG_CHANNEL_MAX]; /* "" = images not published */
+    uint32_t status_every;                  /* frame sets between status messages, >= 1 */
+} rp_config_t;
+
+/* Read and check the file at path. On failure cfg is unspecified and err (err_len bytes, may be
+ * NULL) holds "path:line: key: message". Returns RP_CFG_OK or the kind of the first error. */
+rp_cfg_status_t rp_config_load(const char *path, rp_config_t *cfg, char *err, size_t err_len);
+
+/* The same from text in memory; `name` stands for the file name in messages and resolves
+ * relative paths (replay_index) against its folder. */
+rp_cfg_status_t rp_config_parse(const char *text, size_t len, const char *name, rp_config_t *cfg,
+                                char *err, size_t err_len);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_CONFIG_H */

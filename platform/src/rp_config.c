@@ -1,0 +1,948 @@
+/*
+ * rp_config.c - the configuration file (schema: config/README.md), read with libyaml's document
+ * API. The schema lives in the parse_* functions below, one per mapping of the file, each
+ * listing the keys it knows; every value goes through one typed getter that checks type and
+ * range and reports "FILE:LINE: KEY: message" on the first error.
+ */
+#include "rigpose/rp_config.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <yaml.h>
+
+#include "rigpose/rp_rot.h"
+
+const char *rp_cfg_status_str(rp_cfg_status_t s)
+{
+    switch (s) {
+    case RP_CFG_OK: return "ok";
+    case RP_CFG_E_ARG: return "bad argument";
+    case RP_CFG_E_OPEN: return "cannot read file";
+    case RP_CFG_E_SYNTAX: return "YAML syntax";
+    case RP_CFG_E_MISSING: return "missing key";
+    case RP_CFG_E_TYPE: return "wrong type";
+    case RP_CFG_E_RANGE: return "value out of range";
+    case RP_CFG_E_UNKNOWN: return "unknown key";
+    }
+    return "unknown status";
+}
+
+static const char *const method_names[] = {"stereo4", "stereo2", "gc", "cam1",
+                                           "cam2",    "cam3",    "cam4", "rc"};
+#define N_METHODS (sizeof method_names / sizeof method_names[0])
+
+const char *rp_method_name(rp_method_t m)
+{
+    return (unsigned)m < N_METHODS ? method_names[m] : "?";
+}
+
+/* ---- context and error reporting ----------------------------------------------------------- */
+
+typedef struct {
+    const char *file;
+    yaml_document_t *doc;
+    char *err;
+    size_t err_len;
+    rp_cfg_status_t st; /* first error; RP_CFG_OK while none */
+} ctx_t;
+
+#define KEY_MAX 96 /* longest key path in a message */
+
+/* Record the first error, at node `at` (its line) for key path `key`. Returns -1. */
+static int fail(ctx_t *c, rp_cfg_status_t st, const yaml_node_t *at, const char *key,
+                const char *fmt, ...)
+{
+    if (c->st != RP_CFG_OK) {
+        return -1;
+    }
+    c->st = st;
+    if (c->err != NULL && c->err_len > 0) {
+        char msg[256];
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(msg, sizeof msg, fmt, ap);
+        va_end(ap);
+        const unsigned long line = at != NULL ? (unsigned long)at->start_mark.line + 1u : 0u;
+        snprintf(c->err, c->err_len, "%s:%lu: %s: %s", c->file, line, key, msg);
+    }
+    return -1;
+}
+
+static void key_path(char *out, const char *path, const char *key)
+{
+    if (path[0] == '\0') {
+        snprintf(out, KEY_MAX, "%s", key);
+    } else {
+        snprintf(out, KEY_MAX, "%s.%s", path, key);
+    }
+}
+
+static yaml_node_t *node(ctx_t *c, int index)
+{
+    return yaml_document_get_node(c->doc, index);
+}
+
+static const char *node_kind(const yaml_node_t *n)
+{
+    switch (n->type) {
+    case YAML_SCALAR_NODE: return "a scalar";
+    case YAML_SEQUENCE_NODE: return "a sequence";
+    case YAML_MAPPING_NODE: return "a mapping";
+    default: return "nothing";
+    }
+}
+
+static const char *scalar(const yaml_node_t *n)
+{
+    return (const char *)n->data.scalar.value;
+}
+
+/* Value of `key` in mapping map, NULL if absent. */
+static yaml_node_t *map_get(ctx_t *c, const yaml_node_t *map, const char *key)
+{
+    for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < map->data.mapping.pairs.top;
+         ++p) {
+        const yaml_node_t *k = node(c, p->key);
+        if (k != NULL && k->type == YAML_SCALAR_NODE && strcmp(scalar(k), key) == 0) {
+            return node(c, p->value);
+        }
+    }
+    return NULL;
+}
+
+/* Every key of map must be a scalar in `known` (NULL-terminated) and appear once. */
+static int check_keys(ctx_t *c, const yaml_node_t *map, const char *path,
+                      const char *const *known)
+{
+    char kp[KEY_MAX];
+    for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < map->data.mapping.pairs.top;
+         ++p) {
+        const yaml_node_t *k = node(c, p->key);
+        if (k == NULL || k->type != YAML_SCALAR_NODE) {
+            return fail(c, RP_CFG_E_TYPE, k, path[0] ? path : "(top)", "a key must be a scalar");
+        }
+        key_path(kp, path, scalar(k));
+        int found = 0;
+        for (const char *const *q = known; *q != NULL; ++q) {
+            found |= strcmp(*q, scalar(k)) == 0;
+        }
+        if (!found) {
+            return fail(c, RP_CFG_E_UNKNOWN, k, kp, "unknown key (schema: config/README.md)");
+        }
+        for (yaml_node_pair_t *o = map->data.mapping.pairs.start; o < p; ++o) {
+            const yaml_node_t *ko = node(c, o->key);
+            if (ko != NULL && ko->type == YAML_SCALAR_NODE && strcmp(scalar(ko), scalar(k)) == 0) {
+                return fail(c, RP_CFG_E_RANGE, k, kp, "key given twice");
+            }
+        }
+    }
+    return 0;
+}
+
+/* A mapping child: *out = the node, or NULL if absent and optional. */
+static int get_map(ctx_t *c, const yaml_node_t *map, const char *path, const char *key,
+                   int required, yaml_node_t **out)
+{
+    char kp[KEY_MAX];
+    key_path(kp, path, key);
+    *out = map_get(c, map, key);
+    if (*out == NULL) {
+        return required ? fail(c, RP_CFG_E_MISSING, map, kp, "missing (required mapping)") : 0;
+    }
+    if ((*out)->type != YAML_MAPPING_NODE) {
+        return fail(c, RP_CFG_E_TYPE, *out, kp, "expected a mapping, got %s", node_kind(*out));
+    }
+    return 0;
+}
+
+/* ---- scalars -------------------------------------------------------------------------------- */
+
+static int is_plain_scalar(const yaml_node_t *n)
+{
+    return n->type == YAML_SCALAR_NODE && n->data.scalar.style != YAML_SINGLE_QUOTED_SCALAR_STYLE &&
+           n->data.scalar.style != YAML_DOUBLE_QUOTED_SCALAR_STYLE;
+}
+
+static int scalar_int(const yaml_node_t *n, long long *v)
+{
+    if (!is_plain_scalar(n) || n->data.scalar.length == 0) {
+        return -1;
+    }
+    char *end = NULL;
+    errno = 0;
+    *v = strtoll(scalar(n), &end, 10);
+    return (errno == 0 && end != NULL && *end == '\0') ? 0 : -1;
+}
+
+static int scalar_num(const yaml_node_t *n, double *v)
+{
+    if (!is_plain_scalar(n) || n->data.scalar.length == 0) {
+        return -1;
+    }
+    char *end = NULL;
+    errno = 0;
+    *v = strtod(scalar(n), &end);
+    return (errno == 0 && end != NULL && *end == '\0' && isfinite(*v)) ? 0 : -1;
+}
+
+static int get_int(ctx_t *c, const yaml_node_t *map, const char *path, const char *key,
+                   int required, long long def, long long lo, long long hi, long long *out)
+{
+    char kp[KEY_MAX];
+    key_path(kp, path, key);
+    const yaml_node_t *n = map_get(c, map, key);
+    if (n == NULL) {
+        *out = def;
+        return required ? fail(c, RP_CFG_E_MISSING, map, kp, "missing (required integer)") : 0;
+    }
+    if (scalar_int(n, out) != 0) {
+        return fail(c, RP_CFG_E_TYPE, n, kp, "expected an integer, got %s%s%s", node_kind(n),
+                    n->type == YAML_SCALAR_NODE ? " " : "",
+                    n->type == YAML_SCALAR_NODE ? scalar(n) : "");
+    }
+    if (*out < lo || *out > hi) {
+        return fail(c, RP_CFG_E_RANGE, n, kp, "%lld is outside %lld..%lld", *out, lo, hi);
+    }
+    return 0;
+}
+
+/* A number in [lo, hi]; lo_open / hi_open make that end exclusive. */
+static int get_num(ctx_t *c, const yaml_node_t *map, const char *path, const char *key,
+                   int required, double def, double lo, int lo_open, double hi, double *out)
+{
+    char kp[KEY_MAX];
+    key_path(kp, path, key);
+    const yaml_node_t *n = map_get(c, map, key);
+    if (n == NULL) {
+        *out = def;
+        return required ? fail(c, RP_CFG_E_MISSING, map, kp, "missing (required number)") : 0;
+    }
+    if (scalar_num(n, out) != 0) {
+        return fail(c, RP_CFG_E_TYPE, n, kp, "expected a finite number, got %s%s%s",
+                    node_kind(n), n->type == YAML_SCALAR_NODE ? " " : "",
+                    n->type == YAML_SCALAR_NODE ? scalar(n) : "");
+    }
+    if (*out < lo || (lo_open && *out == lo) || *out > hi) {
+        return fail(c, RP_CFG_E_RANGE, n, kp, "%g is outside %s%g, %g]", *out,
+                    lo_open ? "(" : "[", lo, hi);
+    }
+    return 0;
+}
+
+static int get_bool(ctx_t *c, const yaml_node_t *map, const char *path, const char *key,
+                    int def, uint8_t *out)
+{
+    char kp[KEY_MAX];
+    key_path(kp, path, key);
+    const yaml_node_t *n = map_get(c, map, key);
+    *out = (uint8_t)def;
+    if (n == NULL) {
+        return 0;
+    }
+    if (is_plain_scalar(n) && (strcmp(scalar(n), "true") == 0 || strcmp(scalar(n), "True") == 0)) {
+        *out = 1;
+        return 0;
+    }
+    if (is_plain_scalar(n) &&
+        (strcmp(scalar(n), "false") == 0 || strcmp(scalar(n), "False") == 0)) {
+        *out = 0;
+        return 0;
+    }
+    return fail(c, RP_CFG_E_TYPE, n, kp, "expected true or false");
+}
+
+/* A string of 1..cap-1 characters (0..cap-1 if allow_empty). */
+static int get_str(ctx_t *c, const yaml_node_t *map, const char *path, const char *key,
+                   int required, const char *def, int allow_empty, char *out, size_t cap)
+{
+    char kp[KEY_MAX];
+    key_path(kp, path, key);
+    const yaml_node_t *n = map_get(c, map, key);
+    if (n == NULL) {
+        snprintf(out, cap, "%s", def);
+        return required ? fail(c, RP_CFG_E_MISSING, map, kp, "missing (required string)") : 0;
+    }
+    if (n->type != YAML_SCALAR_NODE) {
+        return fail(c, RP_CFG_E_TYPE, n, kp, "expected a string, got %s", node_kind(n));
+    }
+    if (n->data.scalar.length >= cap) {
+        return fail(c, RP_CFG_E_RANGE, n, kp, "longer than %zu characters", cap - 1);
+    }
+    if (n->data.scalar.length == 0 && !allow_empty) {
+        return fail(c, RP_CFG_E_RANGE, n, kp, "must not be empty");
+    }
+    memcpy(out, scalar(n), n->data.scalar.length);
+    out[n->data.scalar.length] = '\0';
+    return 0;
+}
+
+/* A sequence of exactly n finite numbers. *present = 0 if absent (then out is untouched). */
+static int get_nums(ctx_t *c, const yaml_node_t *map, const char *path, const char *key,
+                    int required, size_t n, double *out, int *present)
+{
+    char kp[KEY_MAX];
+    key_path(kp, path, key);
+    const yaml_node_t *s = map_get(c, map, key);
+    *present = s != NULL;
+    if (s == NULL) {
+        return required ? fail(c, RP_CFG_E_MISSING, map, kp, "missing (required list of %zu numbers)",
+                               n)
+                        : 0;
+    }
+    if (s->type != YAML_SEQUENCE_NODE) {
+        return fail(c, RP_CFG_E_TYPE, s, kp, "expected a list of %zu numbers, got %s", n,
+                    node_kind(s));
+    }
+    const size_t got = (size_t)(s->data.sequence.items.top - s->data.sequence.items.start);
+    if (got != n) {
+        return fail(c, RP_CFG_E_TYPE, s, kp, "expected %zu numbers, got %zu", n, got);
+    }
+    for (size_t i = 0; i < n; ++i) {
+        const yaml_node_t *e = node(c, s->data.sequence.items.start[i]);
+        if (e == NULL || scalar_num(e, &out[i]) != 0) {
+            return fail(c, RP_CFG_E_TYPE, e != NULL ? e : s, kp,
+                        "element %zu: expected a finite number", i);
+        }
+    }
+    return 0;
+}
+
+/* ---- cameras ------------------------------------------------------------------------------- */
+
+static int parse_camera(ctx_t *c, const yaml_node_t *m, unsigned i, rp_config_t *cfg)
+{
+    static const char *const known[] = {"name",     "device",   "width",    "height",
+                                        "fps",      "intrinsics", "distortion", "position",
+                                        "rotation", "angles",   NULL};
+    char path[KEY_MAX], kp[KEY_MAX];
+    snprintf(path, sizeof path, "cameras[%u]", i);
+    if (m->type != YAML_MAPPING_NODE) {
+        return fail(c, RP_CFG_E_TYPE, m, path, "expected a mapping, got %s", node_kind(m));
+    }
+    if (check_keys(c, m, path, known) != 0) {
+        return -1;
+    }
+    rp_rig_cam_t *rc = &cfg->rig.cam[i];
+    rp_hal_cam_cfg_t *hc = &cfg->hal.cam[i];
+    long long w, h, fps;
+    double in[4], dist[5] = {0, 0, 0, 0, 0}, pos[3], rot[9], abg[3];
+    int have_rot = 0, have_abg = 0, present = 0;
+    if (get_str(c, m, path, "name", 1, "", 0, cfg->cam_name[i], RP_CFG_NAME_MAX) ||
+        get_str(c, m, path, "device", 1, "", 0, hc->device, sizeof hc->device) ||
+        get_int(c, m, path, "width", 1, 0, 16, 4096, &w) ||
+        get_int(c, m, path, "height", 1, 0, 16, 4096, &h) ||
+        get_int(c, m, path, "fps", 0, 30, 1, 1000, &fps) ||
+        get_nums(c, m, path, "intrinsics", 1, 4, in, &present) ||
+        get_nums(c, m, path, "distortion", 0, 5, dist, &present) ||
+        get_nums(c, m, path, "position", 1, 3, pos, &present) ||
+        get_nums(c, m, path, "rotation", 0, 9, rot, &have_rot) ||
+        get_nums(c, m, path, "angles", 0, 3, abg, &have_abg)) {
+        return -1;
+    }
+    for (unsigned j = 0; j < i; ++j) {
+        if (strcmp(cfg->cam_name[j], cfg->cam_name[i]) == 0) {
+            key_path(kp, path, "name");
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "name"), kp,
+                        "'%s' is already the name of cameras[%u]", cfg->cam_name[i], j);
+        }
+    }
+    key_path(kp, path, "intrinsics");
+    const yaml_node_t *n_in = map_get(c, m, "intrinsics");
+    if (!(in[0] > 0.0 && in[0] < 1e6 && in[1] > 0.0 && in[1] < 1e6)) {
+        return fail(c, RP_CFG_E_RANGE, n_in, kp, "fx, fy must be in (0, 1e6) px");
+    }
+    if (!(in[2] >= 0.0 && in[2] < (double)w && in[3] >= 0.0 && in[3] < (double)h)) {
+        return fail(c, RP_CFG_E_RANGE, n_in, kp, "principal point (%g, %g) outside the %lldx%lld image",
+                    in[2], in[3], w, h);
+    }
+    for (int k = 0; k < 5; ++k) {
+        if (fabs(dist[k]) >= 100.0) {
+            key_path(kp, path, "distortion");
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "distortion"), kp,
+                        "coefficient %d (%g) is not in (-100, 100)", k, dist[k]);
+        }
+    }
+    for (int k = 0; k < 3; ++k) {
+        if (fabs(pos[k]) >= 100.0) {
+            key_path(kp, path, "position");
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "position"), kp,
+                        "coordinate %d (%g m) is not in (-100, 100) m", k, pos[k]);
+        }
+    }
+    if (have_rot && have_abg) {
+        key_path(kp, path, "angles");
+        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "angles"), kp,
+                    "give either rotation or angles, not both");
+    }
+    if (!have_rot && !have_abg) {
+        key_path(kp, path, "rotation");
+        return fail(c, RP_CFG_E_MISSING, m, kp, "missing (rotation: 9 numbers, or angles: 3)");
+    }
+    if (have_abg) {
+        /* R = Rz(gamma) Ry(beta) Rx(alpha), in double here: the check below is in double. */
+        const double ca = cos(abg[0]), sa = sin(abg[0]), cb = cos(abg[1]), sb = sin(abg[1]);
+        const double cg = cos(abg[2]), sg = sin(abg[2]);
+        const double R[9] = {cg * cb, cg * sb * sa - sg * ca, cg * sb * ca + sg * sa,
+                             sg * cb, sg * sb * sa + cg * ca, sg * sb * ca - cg * sa,
+                             -sb,     cb * sa,                cb * ca};
+        memcpy(rot, R, sizeof R);
+    } else {
+        double worst = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            for (int b = 0; b < 3; ++b) {
+                double d = 0.0;
+                for (int k = 0; k < 3; ++k) {
+                    d += rot[3 * k + a] * rot[3 * k + b];
+                }
+                worst = fmax(worst, fabs(d - (a == b ? 1.0 : 0.0)));
+            }
+        }
+        const double det = rot[0] * (rot[4] * rot[8] - rot[5] * rot[7]) -
+                           rot[1] * (rot[3] * rot[8] - rot[5] * rot[6]) +
+                           rot[2] * (rot[3] * rot[7] - rot[4] * rot[6]);
+        if (worst > 1e-6 || det < 0.0) {
+            key_path(kp, path, "rotation");
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "rotation"), kp,
+                        "not a rotation (R^T R off the identity by %.2g, det %.6g)", worst, det);
+        }
+    }
+    if (i == 0) {
+        double off = fabs(pos[0]) + fabs(pos[1]) + fabs(pos[2]);
+        for (int k = 0; k < 9; ++k) {
+            off += fabs(rot[k] - ((k % 4) == 0 ? 1.0 : 0.0));
+        }
+        if (off > 1e-9) {
+            return fail(c, RP_CFG_E_RANGE, m, path,
+                        "the first camera is the reference (cam1): position [0, 0, 0] and the "
+                        "identity rotation");
+        }
+    }
+    for (int k = 0; k < 9; ++k) {
+        rc->R[k] = (rp_real)rot[k];
+    }
+    rp_rot_orthonormalize(rc->R);
+    for (int k = 0; k < 3; ++k) {
+        rc->D[k] = (rp_real)pos[k];
+    }
+    rc->cam = rp_cam_pinhole((uint16_t)w, (uint16_t)h, (rp_real)in[0], (rp_real)in[1],
+                             (rp_real)in[2], (rp_real)in[3]);
+    rc->cam.k1 = (rp_real)dist[0];
+    rc->cam.k2 = (rp_real)dist[1];
+    rc->cam.p1 = (rp_real)dist[2];
+    rc->cam.p2 = (rp_real)dist[3];
+    rc->cam.k3 = (rp_real)dist[4];
+    hc->w = (uint16_t)w;
+    hc->h = (uint16_t)h;
+    hc->fps = (uint16_t)fps;
+    return 0;
+}
+
+static int parse_cameras(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
+{
+    const yaml_node_t *s = map_get(c, root, "cameras");
+    if (s == NULL) {
+        return fail(c, RP_CFG_E_MISSING, root, "cameras", "missing (required list of cameras)");
+    }
+    if (s->type != YAML_SEQUENCE_NODE) {
+        return fail(c, RP_CFG_E_TYPE, s, "cameras", "expected a list of cameras, got %s",
+                    node_kind(s));
+    }
+    const long n = (long)(s->data.sequence.items.top - s->data.sequence.items.start);
+    if (n < 1 || n > RP_MAX_CAMS) {
+        return fail(c, RP_CFG_E_RANGE, s, "cameras", "%ld cameras; this build takes 1..%d", n,
+                    RP_MAX_CAMS);
+    }
+    cfg->rig.n_cams = (uint8_t)n;
+    cfg->hal.n_cams = (uint8_t)n;
+    for (long i = 0; i < n; ++i) {
+        if (parse_camera(c, node(c, s->data.sequence.items.start[i]), (unsigned)i, cfg) != 0) {
+            return -1;
+        }
+    }
+    if (rp_rig_check(&cfg->rig) != RP_OK) {
+        return fail(c, RP_CFG_E_RANGE, s, "cameras", "the rig is not usable (rp_rig_check)");
+    }
+    return 0;
+}
+
+/* ---- source -------------------------------------------------------------------------------- */
+
+/* replay_index relative to the configuration file's folder. */
+static int resolve_path(ctx_t *c, const yaml_node_t *at, const char *rel, char *out, size_t cap)
+{
+    const char *slash = strrchr(c->file, '/');
+    int n;
+    if (rel[0] == '/' || slash == NULL) {
+        n = snprintf(out, cap, "%s", rel);
+    } else {
+        n = snprintf(out, cap, "%.*s/%s", (int)(slash - c->file), c->file, rel);
+    }
+    if (n < 0 || (size_t)n >= cap) {
+        return fail(c, RP_CFG_E_RANGE, at, "source.replay_index", "path longer than %zu characters",
+                    cap - 1);
+    }
+    return 0;
+}
+
+static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
+{
+    static const char *const known[] = {"kind",     "timeout_ms",   "sync_tol_us", "retry_ms",
+                                        "realtime", "replay_index", "sim",         NULL};
+    static const char *const sim_known[] = {"seed", "frames", "noise_px", "drop_cam",
+                                            "drop_from", NULL};
+    yaml_node_t *m, *sm;
+    char kind[16], rel[RP_HAL_PATH_MAX];
+    long long to, tol, retry, seed, frames, drop_cam, drop_from;
+    if (get_map(c, root, "", "source", 1, &m) ||
+        check_keys(c, m, "source", known) ||
+        get_str(c, m, "source", "kind", 1, "", 0, kind, sizeof kind) ||
+        get_int(c, m, "source", "timeout_ms", 0, 1000, 1, 60000, &to) ||
+        get_int(c, m, "source", "sync_tol_us", 0, 5000, 0, 1000000, &tol) ||
+        get_int(c, m, "source", "retry_ms", 0, 1000, 10, 60000, &retry) ||
+        get_bool(c, m, "source", "realtime", 0, &cfg->hal.realtime) ||
+        get_str(c, m, "source", "replay_index", 0, "", 0, rel, sizeof rel) ||
+        get_map(c, m, "source", "sim", 0, &sm)) {
+        return -1;
+    }
+    if (strcmp(kind, "sim") == 0) {
+        cfg->hal.kind = RP_HAL_SRC_SIM;
+    } else if (strcmp(kind, "v4l2") == 0) {
+        cfg->hal.kind = RP_HAL_SRC_V4L2;
+    } else if (strcmp(kind, "replay") == 0) {
+        cfg->hal.kind = RP_HAL_SRC_REPLAY;
+    } else {
+        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "kind"), "source.kind",
+                    "'%s' is not one of sim, v4l2, replay", kind);
+    }
+    cfg->hal.timeout_ms = (uint32_t)to;
+    cfg->hal.sync_tol_us = tol;
+    cfg->hal.retry_ms = (uint32_t)retry;
+    if (cfg->hal.kind == RP_HAL_SRC_REPLAY) {
+        if (rel[0] == '\0') {
+            return fail(c, RP_CFG_E_MISSING, m, "source.replay_index",
+                        "missing (required with kind: replay)");
+        }
+        if (resolve_path(c, map_get(c, m, "replay_index"), rel, cfg->hal.replay_index,
+                         sizeof cfg->hal.replay_index) != 0) {
+            return -1;
+        }
+    }
+    const int n = cfg->rig.n_cams;
+    if (sm == NULL) {
+        seed = 1;
+        frames = 0;
+        cfg->sim.noise_px = 0.5;
+        drop_cam = -1;
+        drop_from = 0;
+    } else if (check_keys(c, sm, "source.sim", sim_known) ||
+               get_int(c, sm, "source.sim", "seed", 0, 1, 0, 4294967295LL, &seed) ||
+               get_int(c, sm, "source.sim", "frames", 0, 0, 0, 100000, &frames) ||
+               get_num(c, sm, "source.sim", "noise_px", 0, 0.5, 0.0, 0, 10.0, &cfg->sim.noise_px) ||
+               get_int(c, sm, "source.sim", "drop_cam", 0, -1, -1, n - 1, &drop_cam) ||
+               get_int(c, sm, "source.sim", "drop_from", 0, 0, 0, 4294967295LL, &drop_from)) {
+        return -1;
+    }
+    cfg->sim.seed = (uint32_t)seed;
+    cfg->sim.frames = (uint32_t)frames;
+    cfg->sim.drop_cam = (int16_t)drop_cam;
+    cfg->sim.drop_from = (uint32_t)drop_from;
+    cfg->hal.sim_seed = cfg->sim.seed;
+    cfg->hal.sim_frames = cfg->sim.frames;
+
+    const yaml_node_t *cams = map_get(c, root, "cameras");
+    if (cfg->hal.kind == RP_HAL_SRC_SIM && n != 6) {
+        return fail(c, RP_CFG_E_RANGE, cams, "cameras",
+                    "the sim source simulates the protocol's 6 cameras (cam1, cam2, cam3, cam4, "
+                    "cam1b, cam3b); %d given",
+                    n);
+    }
+    if (cfg->hal.kind != RP_HAL_SRC_SIM) {
+        for (int i = 0; i < n; ++i) {
+            if (cfg->hal.cam[i].w > RP_TRACK_MAX_W || cfg->hal.cam[i].h > RP_TRACK_MAX_H) {
+                char kp[KEY_MAX];
+                snprintf(kp, sizeof kp, "cameras[%d].width", i);
+                return fail(c, RP_CFG_E_RANGE, node(c, cams->data.sequence.items.start[i]), kp,
+                            "%ux%u is larger than this build's tracker takes (%dx%d)",
+                            cfg->hal.cam[i].w, cfg->hal.cam[i].h, RP_TRACK_MAX_W, RP_TRACK_MAX_H);
+            }
+        }
+    }
+    return 0;
+}
+
+/* ---- estimator ----------------------------------------------------------------------------- */
+
+/* Camera index of the name in scalar node n. */
+static int cam_index(ctx_t *c, const rp_config_t *cfg, const yaml_node_t *n, const char *kp,
+                     uint8_t *idx)
+{
+    if (n == NULL || n->type != YAML_SCALAR_NODE) {
+        return fail(c, RP_CFG_E_TYPE, n, kp, "expected a camera name");
+    }
+    for (uint8_t k = 0; k < cfg->rig.n_cams; ++k) {
+        if (strcmp(cfg->cam_name[k], scalar(n)) == 0) {
+            *idx = k;
+            return 0;
+        }
+    }
+    return fail(c, RP_CFG_E_RANGE, n, kp, "no camera is named '%s'", scalar(n));
+}
+
+/* A list of camera names (sequence node s) into idx[]; lengths lo..hi; all distinct from each
+ * other and from taken[] (a camera in two pairs). */
+static int name_list(ctx_t *c, const rp_config_t *cfg, const yaml_node_t *s, const char *kp,
+                     size_t lo, size_t hi, uint8_t *idx, size_t *n_out, uint8_t *taken)
+{
+    if (s->type != YAML_SEQUENCE_NODE) {
+        return fail(c, RP_CFG_E_TYPE, s, kp, "expected a list of camera names, got %s",
+                    node_kind(s));
+    }
+    const size_t n = (size_t)(s->data.sequence.items.top - s->data.sequence.items.start);
+    if (n < lo || n > hi) {
+        return fail(c, RP_CFG_E_TYPE, s, kp, "expected %zu..%zu camera names, got %zu", lo, hi, n);
+    }
+    for (size_t i = 0; i < n; ++i) {
+        const yaml_node_t *e = node(c, s->data.sequence.items.start[i]);
+        if (cam_index(c, cfg, e, kp, &idx[i]) != 0) {
+            return -1;
+        }
+        if (taken[idx[i]]) {
+            return fail(c, RP_CFG_E_RANGE, e, kp, "camera '%s' is used twice", scalar(e));
+        }
+        taken[idx[i]] = 1;
+    }
+    *n_out = n;
+    return 0;
+}
+
+static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
+{
+    static const char *const known[] = {
+        "method",      "pairs",        "cams",          "sigma_px",         "q_trans",
+        "q_rot",       "gate_chi2",    "iterations",    "min_features",     "min_tracked",
+        "max_epipolar_px", "min_depth_m", "max_depth_m", "max_reproj_px",   "refine_structure",
+        "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s", NULL};
+    const char *P = "estimator";
+    yaml_node_t *m;
+    char method[16];
+    double sigma, qt, qr, gate, epi, dmin, dmax, reproj, idep, isig, dt;
+    long long iters, minf, mint;
+    uint8_t refine, sphere;
+    if (get_map(c, root, "", "estimator", 1, &m) || check_keys(c, m, P, known) ||
+        get_str(c, m, P, "method", 1, "", 0, method, sizeof method) ||
+        get_num(c, m, P, "sigma_px", 0, 0.5, 0.0, 1, 100.0, &sigma) ||
+        get_num(c, m, P, "q_trans", 0, 1.0, 0.0, 0, 1e6, &qt) ||
+        get_num(c, m, P, "q_rot", 0, 1.0, 0.0, 0, 1e6, &qr) ||
+        get_num(c, m, P, "gate_chi2", 0, 13.8, -1e6, 0, 1e6, &gate) ||
+        get_int(c, m, P, "iterations", 0, 3, 1, 20, &iters) ||
+        get_int(c, m, P, "min_features", 0, 6, 3, RP_MAX_FEATS_PER_CAM, &minf) ||
+        get_int(c, m, P, "min_tracked", 0, 50, 6, RP_MAX_FEATS_PER_CAM, &mint) ||
+        get_num(c, m, P, "max_epipolar_px", 0, 1.5, 0.0, 1, 100.0, &epi) ||
+        get_num(c, m, P, "min_depth_m", 0, 0.05, 0.0, 1, 1e6, &dmin) ||
+        get_num(c, m, P, "max_depth_m", 0, 100.0, 0.0, 1, 1e6, &dmax) ||
+        get_num(c, m, P, "max_reproj_px", 0, 1.5, 0.0, 1, 100.0, &reproj) ||
+        get_bool(c, m, P, "refine_structure", 1, &refine) ||
+        get_num(c, m, P, "init_depth_m", 0, 0.8335, 0.0, 1, 1e4, &idep) ||
+        get_num(c, m, P, "init_depth_sigma_m", 0, 0.15, 0.0, 1, 1e4, &isig) ||
+        get_bool(c, m, P, "init_on_sphere", 1, &sphere) ||
+        get_num(c, m, P, "default_dt_s", 0, 1.0 / 30.0, 0.0, 1, 10.0, &dt)) {
+        return -1;
+    }
+    int mi = -1;
+    for (size_t k = 0; k < N_METHODS; ++k) {
+        if (strcmp(method, method_names[k]) == 0) {
+            mi = (int)k;
+        }
+    }
+    if (mi < 0) {
+        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "method"), "estimator.method",
+                    "'%s' is not one of stereo4, stereo2, gc, cam1, cam2, cam3, cam4, rc", method);
+    }
+    if (dmin >= dmax) {
+        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "max_depth_m"), "estimator.max_depth_m",
+                    "must be larger than min_depth_m (%g)", dmin);
+    }
+    cfg->method = (rp_method_t)mi;
+
+    rp_ekf_params_t ekf = rp_ekf_default_params();
+    ekf.sigma_px = (rp_real)sigma;
+    ekf.q_trans = (rp_real)qt;
+    ekf.q_rot = (rp_real)qr;
+    ekf.gate_chi2 = (rp_real)gate;
+    ekf.iterations = (uint8_t)iters;
+    ekf.min_features = (uint16_t)minf;
+
+    rp_vo_stereo_cfg_t *st = &cfg->stereo;
+    *st = rp_vo_stereo_default_cfg();
+    st->ekf = ekf;
+    st->min_tracked = (uint16_t)mint;
+    st->max_epipolar_px = (rp_real)epi;
+    st->min_depth_m = (rp_real)dmin;
+    st->max_depth_m = (rp_real)dmax;
+    st->max_reproj_px = (rp_real)reproj;
+    st->default_dt_s = (rp_real)dt;
+    st->refine_structure = refine;
+
+    rp_vo_gc_cfg_t *gc = &cfg->gc;
+    *gc = rp_vo_gc_default_cfg();
+    gc->ekf = ekf;
+    gc->min_tracked = (uint16_t)mint;
+    gc->init_depth_m = (rp_real)idep;
+    gc->init_depth_sigma_m = (rp_real)isig;
+    gc->init_on_sphere = sphere;
+    gc->default_dt_s = (rp_real)dt;
+
+    for (int k = 0; k < 4; ++k) {
+        rp_vo_mono_cfg_t *mo = &cfg->mono[k];
+        *mo = rp_vo_mono_default_cfg();
+        mo->ekf = ekf;
+        mo->min_tracked = (uint16_t)mint;
+        mo->init_depth_m = (rp_real)idep;
+        mo->init_depth_sigma_m = (rp_real)isig;
+        mo->default_dt_s = (rp_real)dt;
+    }
+
+    uint8_t taken[RP_MAX_CAMS] = {0};
+    uint8_t idx[RP_MAX_CAMS];
+    size_t n = 0;
+    const yaml_node_t *pairs = map_get(c, m, "pairs");
+    const yaml_node_t *cams = map_get(c, m, "cams");
+    if (cfg->method == RP_METHOD_STEREO4 || cfg->method == RP_METHOD_STEREO2) {
+        const size_t want = cfg->method == RP_METHOD_STEREO4 ? 2 : 1;
+        if (pairs == NULL) {
+            return fail(c, RP_CFG_E_MISSING, m, "estimator.pairs",
+                        "missing (method %s needs %zu stereo pair%s)", method, want,
+                        want > 1 ? "s" : "");
+        }
+        if (pairs->type != YAML_SEQUENCE_NODE ||
+            (size_t)(pairs->data.sequence.items.top - pairs->data.sequence.items.start) != want) {
+            return fail(c, RP_CFG_E_TYPE, pairs, "estimator.pairs",
+                        "expected a list of %zu pair%s [left, right]", want, want > 1 ? "s" : "");
+        }
+        st->n_pairs = (uint8_t)want;
+        for (size_t p = 0; p < want; ++p) {
+            char kp[KEY_MAX];
+            snprintf(kp, sizeof kp, "estimator.pairs[%zu]", p);
+            if (name_list(c, cfg, node(c, pairs->data.sequence.items.start[p]), kp, 2, 2, idx,
+                          &n, taken) != 0) {
+                return -1;
+            }
+            st->pair_a[p] = idx[0];
+            st->pair_b[p] = idx[1];
+        }
+    } else if (cfg->method == RP_METHOD_GC) {
+        if (cams == NULL) {
+            return fail(c, RP_CFG_E_MISSING, m, "estimator.cams",
+                        "missing (method gc needs its list of single cameras)");
+        }
+        if (name_list(c, cfg, cams, "estimator.cams", 1, RP_MAX_CAMS, idx, &n, taken) != 0) {
+            return -1;
+        }
+        gc->n_cams = (uint8_t)n;
+        memcpy(gc->cams, idx, n);
+    } else {
+        /* cam1..cam4 and rc: by default the cameras named cam1..cam4. */
+        static const char *const defaults[4] = {"cam1", "cam2", "cam3", "cam4"};
+        const size_t want = cfg->method == RP_METHOD_RC ? 4 : 1;
+        const size_t first = cfg->method == RP_METHOD_RC ? 0 : (size_t)(cfg->method - RP_METHOD_CAM1);
+        if (cams != NULL) {
+            if (name_list(c, cfg, cams, "estimator.cams", want, want, idx, &n, taken) != 0) {
+                return -1;
+            }
+        } else {
+            for (size_t k = 0; k < want; ++k) {
+                int found = 0;
+                for (uint8_t j = 0; j < cfg->rig.n_cams; ++j) {
+                    if (strcmp(cfg->cam_name[j], defaults[first + k]) == 0) {
+                        idx[k] = j;
+                        found = 1;
+                    }
+                }
+                if (!found) {
+                    return fail(c, RP_CFG_E_MISSING, m, "estimator.cams",
+                                "missing, and no camera is named '%s' (method %s)",
+                                defaults[first + k], method);
+                }
+            }
+        }
+        cfg->n_mono = (uint8_t)want;
+        for (size_t k = 0; k < want; ++k) {
+            cfg->mono[k].cam = idx[k];
+        }
+    }
+    const int stereo = cfg->method == RP_METHOD_STEREO4 || cfg->method == RP_METHOD_STEREO2;
+    cfg->hal.sim_layout = (uint8_t)(stereo ? 0 : 1);
+    return 0;
+}
+
+/* ---- tracker, lcm ---------------------------------------------------------------------------- */
+
+static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
+{
+    static const char *const known[] = {"target", "levels", "win", "min_dist",
+                                        "fb_max_px", "grid", NULL};
+    const char *P = "tracker";
+    rp_track_cfg_t *t = &cfg->track;
+    (void)rp_track_default_cfg(t);
+    yaml_node_t *m;
+    if (get_map(c, root, "", "tracker", 0, &m) != 0) {
+        return -1;
+    }
+    if (m == NULL) {
+        return 0;
+    }
+    long long target, levels, win, mind;
+    double fb, grid[2] = {t->grid_x, t->grid_y};
+    int present;
+    if (check_keys(c, m, P, known) ||
+        get_int(c, m, P, "target", 0, t->target, 8, RP_MAX_FEATS_PER_CAM, &target) ||
+        get_int(c, m, P, "levels", 0, t->levels, 1, RP_TRACK_MAX_LEVELS, &levels) ||
+        get_int(c, m, P, "win", 0, t->win, 5, RP_TRACK_MAX_WIN, &win) ||
+        get_int(c, m, P, "min_dist", 0, t->min_dist, 1, 1000, &mind) ||
+        get_num(c, m, P, "fb_max_px", 0, (double)t->fb_max_q16 / 65536.0, 0.0, 0, 100.0, &fb) ||
+        get_nums(c, m, P, "grid", 0, 2, grid, &present)) {
+        return -1;
+    }
+    if ((win & 1) == 0) {
+        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "win"), "tracker.win", "%lld is even", win);
+    }
+    if (grid[0] < 1 || grid[1] < 1 || grid[0] != floor(grid[0]) || grid[1] != floor(grid[1]) ||
+        grid[0] * grid[1] > RP_TRACK_MAX_CELLS) {
+        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "grid"), "tracker.grid",
+                    "two positive integers with a product <= %d", RP_TRACK_MAX_CELLS);
+    }
+    t->target = (uint16_t)target;
+    t->topup_below = (uint16_t)(t->target * 4 / 5);
+    t->levels = (uint8_t)levels;
+    t->win = (uint8_t)win;
+    t->min_dist = (uint16_t)mind;
+    t->fb_max_q16 = (uint32_t)lround(fb * 65536.0);
+    t->grid_x = (uint8_t)grid[0];
+    t->grid_y = (uint8_t)grid[1];
+    return 0;
+}
+
+static int parse_lcm(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
+{
+    static const char *const known[] = {"url", "pose_channel", "status_channel", "status_every",
+                                        "image_channel", NULL};
+    const char *P = "lcm";
+    static const yaml_node_t none = {.type = YAML_MAPPING_NODE};
+    yaml_node_t *m;
+    long long every;
+    if (get_map(c, root, "", "lcm", 0, &m) != 0) {
+        return -1;
+    }
+    const yaml_node_t *mm = m != NULL ? m : &none;
+    if ((m != NULL && check_keys(c, m, P, known)) ||
+        get_str(c, mm, P, "url", 0, "udpm://239.255.76.67:7667?ttl=0", 0, cfg->lcm_url,
+                sizeof cfg->lcm_url) ||
+        get_str(c, mm, P, "pose_channel", 0, "RIGPOSE_POSE", 0, cfg->pose_channel,
+                sizeof cfg->pose_channel) ||
+        get_str(c, mm, P, "status_channel", 0, "RIGPOSE_STATUS", 0, cfg->status_channel,
+                sizeof cfg->status_channel) ||
+        get_str(c, mm, P, "image_channel", 0, "", 1, cfg->image_channel,
+                sizeof cfg->image_channel) ||
+        get_int(c, mm, P, "status_every", 0, 1, 1, 10000, &every)) {
+        return -1;
+    }
+    cfg->status_every = (uint32_t)every;
+    return 0;
+}
+
+/* ---- entry points ---------------------------------------------------------------------------- */
+
+static rp_cfg_status_t parse_doc(ctx_t *c, rp_config_t *cfg)
+{
+    static const char *const known[] = {"version", "source", "cameras", "estimator",
+                                        "tracker", "lcm",    "meta",    NULL};
+    const yaml_node_t *root = yaml_document_get_root_node(c->doc);
+    if (root == NULL) {
+        (void)fail(c, RP_CFG_E_SYNTAX, NULL, "(top)", "empty file");
+        return c->st;
+    }
+    if (root->type != YAML_MAPPING_NODE) {
+        (void)fail(c, RP_CFG_E_SYNTAX, root, "(top)", "expected a mapping, got %s",
+                   node_kind(root));
+        return c->st;
+    }
+    long long version;
+    if (check_keys(c, root, "", known) || get_int(c, root, "", "version", 1, 0, 1, 1, &version) ||
+        parse_cameras(c, root, cfg) || parse_source(c, root, cfg) ||
+        parse_estimator(c, root, cfg) || parse_tracker(c, root, cfg) || parse_lcm(c, root, cfg)) {
+        return c->st;
+    }
+    return RP_CFG_OK;
+}
+
+static rp_cfg_status_t parse_with(yaml_parser_t *parser, const char *name, rp_config_t *cfg,
+                                  char *err, size_t err_len)
+{
+    yaml_document_t doc;
+    ctx_t c = {name, &doc, err, err_len, RP_CFG_OK};
+    memset(cfg, 0, sizeof *cfg);
+    snprintf(cfg->path, sizeof cfg->path, "%s", name);
+    if (!yaml_parser_load(parser, &doc)) {
+        if (err != NULL && err_len > 0) {
+            snprintf(err, err_len, "%s:%lu: (yaml): %s%s%s", name,
+                     (unsigned long)parser->problem_mark.line + 1u,
+                     parser->problem ? parser->problem : "syntax error",
+                     parser->context ? " " : "", parser->context ? parser->context : "");
+        }
+        return RP_CFG_E_SYNTAX;
+    }
+    const rp_cfg_status_t st = parse_doc(&c, cfg);
+    yaml_document_delete(&doc);
+    return st;
+}
+
+rp_cfg_status_t rp_config_parse(const char *text, size_t len, const char *name, rp_config_t *cfg,
+                                char *err, size_t err_len)
+{
+    if (err != NULL && err_len > 0) {
+        err[0] = '\0';
+    }
+    if (text == NULL || cfg == NULL) {
+        return RP_CFG_E_ARG;
+    }
+    yaml_parser_t parser;
+    if (!yaml_parser_initialize(&parser)) {
+        return RP_CFG_E_ARG;
+    }
+    yaml_parser_set_input_string(&parser, (const unsigned char *)text, len);
+    const rp_cfg_status_t st = parse_with(&parser, name != NULL ? name : "(string)", cfg, err,
+                                          err_len);
+    yaml_parser_delete(&parser);
+    return st;
+}
+
+rp_cfg_status_t rp_config_load(const char *path, rp_config_t *cfg, char *err, size_t err_len)
+{
+    if (err != NULL && err_len > 0) {
+        err[0] = '\0';
+    }
+    if (path == NULL || cfg == NULL) {
+        return RP_CFG_E_ARG;
+    }
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) {
+        if (err != NULL && err_len > 0) {
+            snprintf(err, err_len, "%s:0: (file): %s", path, strerror(errno));
+        }
+        return RP_CFG_E_OPEN;
+    }
+    yaml_parser_t parser;
+    if (!yaml_parser_initialize(&parser)) {
+        fclose(f);
+        return RP_CFG_E_ARG;
+    }
+    yaml_parser_set_input_file(&parser, f);
+    const rp_cfg_status_t st = parse_with(&parser, path, cfg, err, err_len);
+    yaml_parser_delete(&parser);
+    fclose(f);
+    return st;
+}
