@@ -16,7 +16,7 @@ host_pkgs=(build-essential g++ make pkg-config
            libeigen3-dev libcmocka-dev liblcm-dev liblcm-bin
            libopencv-dev libopengv-dev libyaml-dev valgrind
            python3 python3-venv opencv-doc
-           qemu-system-x86 busybox-static xz-utils cpio)
+           qemu-system-x86 busybox-static xz-utils cpio libpng-dev libjpeg-dev)
 cross_pkgs=(gcc-aarch64-linux-gnu g++-aarch64-linux-gnu qemu-user libcmocka-dev:arm64)
 
 SUDO=""

@@ -44,10 +44,19 @@ typedef enum { RP_HAL_SRC_V4L2 = 0, RP_HAL_SRC_REPLAY, RP_HAL_SRC_SIM } rp_hal_k
 
 #define RP_HAL_PATH_MAX 256
 
+/* Largest image a source delivers (each camera's grey buffer is this big, statically). */
+#ifndef RP_HAL_MAX_W
+#define RP_HAL_MAX_W RP_TRACK_MAX_W
+#endif
+#ifndef RP_HAL_MAX_H
+#define RP_HAL_MAX_H RP_TRACK_MAX_H
+#endif
+
 /* One camera of the source. */
 typedef struct {
-    char device[RP_HAL_PATH_MAX]; /* v4l2: /dev/videoN; replay: folder of this camera's images */
-    uint16_t w, h;                /* wanted size, px (v4l2 negotiates; replay checks) */
+    char device[RP_HAL_PATH_MAX]; /* v4l2: /dev/videoN; replay: unused (frames.csv has paths) */
+    uint16_t w, h;                /* wanted size, px; 0 = any. v4l2 asks for it and refuses a
+                                   * different one; replay checks every image against it */
     uint16_t fps;                 /* wanted rate (v4l2) */
 } rp_hal_cam_cfg_t;
 
@@ -58,7 +67,7 @@ typedef struct {
     int64_t sync_tol_us;                 /* v4l2: frames within this of the set time group */
     uint32_t timeout_ms;                 /* grab gives up after this */
     uint32_t retry_ms;                   /* v4l2: reopen a vanished device this often */
-    char replay_index[RP_HAL_PATH_MAX];  /* replay: timestamps file (format: rp_hal_replay.c) */
+    char replay_index[RP_HAL_PATH_MAX];  /* replay: frames.csv, or the folder holding it */
     uint32_t sim_seed;                   /* sim: run seed (Table 1 protocol) */
     uint32_t sim_frames;                 /* sim: frames in the run (0 = the protocol's 100) */
     uint8_t sim_layout;                  /* sim: 0 = both stereo pairs (4 cams), 1 = four singles */
@@ -105,6 +114,11 @@ rp_hal_status_t rp_hal_start(rp_hal_source_t *src);
 rp_hal_status_t rp_hal_grab(rp_hal_source_t *src, rp_hal_set_t *set);
 rp_hal_status_t rp_hal_stop(rp_hal_source_t *src);
 void rp_hal_close(rp_hal_source_t *src);
+
+/* What went wrong in the source's last failing call, in words naming the device or file (and
+ * line), e.g. "rec/frames.csv:7: want utime_us and 4 image paths"; "" if nothing failed. src NULL:
+ * why the last rp_hal_open failed. Never NULL. */
+const char *rp_hal_errmsg(const rp_hal_source_t *src);
 
 /* Clock (CLOCK_MONOTONIC, microseconds) and sleep. */
 int64_t rp_hal_now_us(void);

@@ -1,0 +1,58 @@
+/*
+ * rp_hal_v4l2.h - the pure parts of the HAL's v4l2 source (no device needed), public so that
+ * tests and tools can pin them down: pixel conversion to 8-bit grey, the per-camera sequence
+ * tracker that counts dropped frames, and the grouping of the cameras' frames into one set.
+ */
+#ifndef RP_HAL_V4L2_H
+#define RP_HAL_V4L2_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rigpose/rp_hal.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* YUYV 4:2:2 (Y0 U Y1 V per two pixels) to grey: the Y bytes. src_stride >= 2 * w, w even or
+ * odd (an odd last pixel is the Y0 of a final pair). RP_HAL_E_ARG on NULL or a short stride. */
+rp_hal_status_t rp_hal_yuyv_to_grey(const uint8_t *src, uint32_t src_stride, uint16_t w,
+                                    uint16_t h, uint8_t *dst, uint32_t dst_stride);
+
+/* UYVY (U Y0 V Y1): the same with the Y bytes at odd offsets. */
+rp_hal_status_t rp_hal_uyvy_to_grey(const uint8_t *src, uint32_t src_stride, uint16_t w,
+                                    uint16_t h, uint8_t *dst, uint32_t dst_stride);
+
+/* One JPEG (MJPEG frame) of n bytes decoded to grey into dst (cap bytes, rows of w). The image
+ * must be exactly w x h: RP_HAL_E_FORMAT for a corrupt or cut stream (any libjpeg warning) or another size. libjpeg decodes
+ * straight to its luminance (no colour conversion); it allocates its work memory itself. */
+rp_hal_status_t rp_hal_jpeg_to_grey(const uint8_t *jpg, size_t n, uint16_t w, uint16_t h,
+                                    uint8_t *dst, size_t cap);
+
+/* Sequence numbers of one camera (v4l2_buffer.sequence): counts the frames the driver skipped.
+ * A repeat (same number) or a step back (the device was reopened, or the counter wrapped) is
+ * not a drop: it restarts the count from that number. */
+typedef struct {
+    uint8_t have;  /* a number was seen */
+    uint32_t last; /* the last number seen */
+    uint32_t drops;   /* frames skipped so far */
+    uint32_t repeats; /* repeated numbers so far */
+} rp_hal_seq_t;
+
+/* Feeds the next number; returns how many frames were skipped just before it (0 if none). */
+uint32_t rp_hal_seq_update(rp_hal_seq_t *s, uint32_t seq);
+
+/* Grouping by timestamp. have[i]: camera i has a pending frame, taken at t_us[i]. The set's
+ * anchor is the newest pending frame; camera i joins the set (in[i] = 1) if its frame is within
+ * tol_us of the anchor, otherwise its frame is stale (in[i] = 0 with have[i] = 1) and the camera
+ * must wait for a newer one. Returns how many cameras joined; *anchor_us gets the anchor (0 if
+ * none pending). */
+uint8_t rp_hal_group(const int64_t t_us[], const uint8_t have[], uint8_t n, int64_t tol_us,
+                     uint8_t in[], int64_t *anchor_us);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_HAL_V4L2_H */

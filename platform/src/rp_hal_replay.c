@@ -1,0 +1,440 @@
+/*
+ * rp_hal_replay.c - the HAL's replay source: recorded or rendered frame sets from a folder.
+ *
+ * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/realdata):
+ *   frames.csv  header `utime_us,cam0,cam1,...` (one image column per configured camera, any
+ *               names), then one row per frame set: the capture time in microseconds (strictly
+ *               increasing) and each camera's image, a path relative to the folder (or absolute).
+ *               Blank lines and lines starting with '#' are skipped.
+ *   truth.csv   optional, header `utime_us,tx,ty,tz,alpha,beta,gamma`: the pose of cam1 in the
+ *               world (as rp_estimate_t.p); a set gets the row with its exact utime, if any.
+ *   images      8-bit grey PNG (libpng; colour or 16-bit PNGs are converted to 8-bit grey) or
+ *               binary PGM (P5, maxval <= 255), at most RP_HAL_MAX_W x RP_HAL_MAX_H, and of the
+ *               configured size if one is given.
+ * Sets come as fast as they are asked for, or with cfg.realtime at their recorded spacing
+ * (the first one at once). set.utime and each camera's utime are the recorded times; seq is the
+ * row's index among the data rows. A failing row (missing or malformed image) returns its error,
+ * naming file and line; the next grab goes on with the next row.
+ */
+#include "rp_hal_priv.h"
+
+#include <errno.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include <png.h>
+
+#define LINE_MAX_CHARS (RP_MAX_CAMS * RP_HAL_PATH_MAX + 64)
+
+typedef struct {
+    uint8_t open, started;
+    rp_hal_cfg_t cfg;
+    char *err;
+    char dir[RP_HAL_PATH_MAX];   /* folder of frames.csv */
+    FILE *frames, *truth;
+    uint32_t line, tline;        /* lines read so far in frames.csv / truth.csv */
+    uint32_t row;                /* data rows read */
+    uint32_t set_seq;
+    int64_t last_u;              /* utime of the last row read */
+    uint8_t any_row;
+    int64_t u0, clock0;          /* realtime pacing: first set's utime and HAL clock */
+    uint8_t paced;
+    uint8_t truth_have;          /* a truth row is buffered */
+    int64_t truth_u;
+    rp_real truth_p[6];
+    char buf[LINE_MAX_CHARS];
+    char path[2 * RP_HAL_PATH_MAX];
+    uint16_t w[RP_MAX_CAMS], h[RP_MAX_CAMS];
+    uint8_t grey[RP_MAX_CAMS][(size_t)RP_HAL_MAX_W * RP_HAL_MAX_H];
+} replay_src_t;
+
+static replay_src_t g_replay;
+
+/* Next meaningful line of f into buf without its end of line. 1: a line, 0: end of file,
+ * -1: a line longer than the buffer. */
+static int next_line(FILE *f, char *buf, size_t cap, uint32_t *line)
+{
+    for (;;) {
+        if (fgets(buf, (int)cap, f) == NULL) {
+            return 0;
+        }
+        (*line)++;
+        size_t n = strlen(buf);
+        if (n == cap - 1 && buf[n - 1] != '\n' && !feof(f)) {
+            return -1;
+        }
+        while (n > 0 && (buf[n - 1] == '\n' || buf[n - 1] == '\r' || buf[n - 1] == ' ')) {
+            buf[--n] = '\0';
+        }
+        if (n > 0 && buf[0] != '#') {
+            return 1;
+        }
+    }
+}
+
+/* Splits buf at commas in place (spaces around fields trimmed). Returns the field count, or
+ * max + 1 if there are more than max. */
+static unsigned split(char *buf, char *fields[], unsigned max)
+{
+    unsigned k = 0;
+    char *p = buf;
+    for (;;) {
+        while (*p == ' ') {
+            p++;
+        }
+        if (k == max) {
+            return max + 1;
+        }
+        fields[k++] = p;
+        char *c = strchr(p, ',');
+        char *end = c != NULL ? c : p + strlen(p);
+        while (end > p && end[-1] == ' ') {
+            end--;
+        }
+        if (c == NULL) {
+            *end = '\0';
+            return k;
+        }
+        *end = '\0';
+        p = c + 1;
+    }
+}
+
+static int parse_i64(const char *s, int64_t *v)
+{
+    char *end;
+    errno = 0;
+    const long long x = strtoll(s, &end, 10);
+    if (errno != 0 || end == s || *end != '\0') {
+        return 0;
+    }
+    *v = (int64_t)x;
+    return 1;
+}
+
+static int parse_real(const char *s, rp_real *v)
+{
+    char *end;
+    errno = 0;
+    const double x = strtod(s, &end);
+    if (errno != 0 || end == s || *end != '\0' || !(x == x)) {
+        return 0;
+    }
+    *v = (rp_real)x;
+    return 1;
+}
+
+/* Binary PGM (P5): header tokens with '#' comments, then w * h bytes. */
+static int pgm_token(FILE *f, unsigned *v)
+{
+    int c = fgetc(f);
+    for (;;) {
+        while (c == ' ' || c == '\t' || c == '\n' || c == '\r') {
+            c = fgetc(f);
+        }
+        if (c != '#') {
+            break;
+        }
+        while (c != '\n' && c != EOF) {
+            c = fgetc(f);
+        }
+    }
+    if (c < '0' || c > '9') {
+        return 0;
+    }
+    unsigned x = 0;
+    while (c >= '0' && c <= '9') {
+        if (x > 100000u) {
+            return 0;
+        }
+        x = x * 10u + (unsigned)(c - '0');
+        c = fgetc(f);
+    }
+    *v = x;
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r'; /* one whitespace ends a token */
+}
+
+static const char *read_pgm(FILE *f, uint8_t *dst, uint16_t *w, uint16_t *h)
+{
+    unsigned pw, ph, maxval;
+    if (fgetc(f) != 'P' || fgetc(f) != '5' || !pgm_token(f, &pw) || !pgm_token(f, &ph) ||
+        !pgm_token(f, &maxval)) {
+        return "not a binary PGM (P5) header";
+    }
+    if (maxval == 0 || maxval > 255) {
+        return "PGM maxval must be 1..255 (8-bit)";
+    }
+    if (pw == 0 || ph == 0 || pw > RP_HAL_MAX_W || ph > RP_HAL_MAX_H) {
+        return "image size 0 or above RP_HAL_MAX_W x RP_HAL_MAX_H";
+    }
+    if (fread(dst, 1, (size_t)pw * ph, f) != (size_t)pw * ph) {
+        return "PGM pixel data truncated";
+    }
+    *w = (uint16_t)pw;
+    *h = (uint16_t)ph;
+    return NULL;
+}
+
+static const char *read_png(const char *path, uint8_t *dst, uint16_t *w, uint16_t *h)
+{
+    png_image im;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&im, path)) {
+        return "malformed PNG";
+    }
+    if (im.width == 0 || im.height == 0 || im.width > RP_HAL_MAX_W ||
+        im.height > RP_HAL_MAX_H) {
+        png_image_free(&im);
+        return "image size 0 or above RP_HAL_MAX_W x RP_HAL_MAX_H";
+    }
+    im.format = PNG_FORMAT_GRAY;
+    if (!png_image_finish_read(&im, NULL, dst, (png_int_32)im.width, NULL)) {
+        png_image_free(&im);
+        return "malformed PNG data";
+    }
+    *w = (uint16_t)im.width;
+    *h = (uint16_t)im.height;
+    return NULL;
+}
+
+/* One image (PNG or PGM, told apart by their first bytes) into the camera's buffer. */
+static rp_hal_status_t load_image(replay_src_t *s, uint8_t cam, const char *rel)
+{
+    const int n = rel[0] == '/' ? snprintf(s->path, sizeof s->path, "%s", rel)
+                                : snprintf(s->path, sizeof s->path, "%s/%s", s->dir, rel);
+    if (n < 0 || (size_t)n >= sizeof s->path || rel[0] == '\0') {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: camera %u: bad path",
+                           s->dir, (unsigned)s->line, (unsigned)cam);
+    }
+    FILE *f = fopen(s->path, "rb");
+    if (f == NULL) {
+        return rp_hal_fail(s->err, RP_HAL_E_OPEN, "%s/frames.csv:%u: %s: %s", s->dir,
+                           (unsigned)s->line, s->path, strerror(errno));
+    }
+    unsigned char magic[4] = {0, 0, 0, 0};
+    const size_t got = fread(magic, 1, 4, f);
+    const char *why;
+    if (got == 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') {
+        fclose(f);
+        why = read_png(s->path, s->grey[cam], &s->w[cam], &s->h[cam]);
+    } else {
+        rewind(f);
+        why = read_pgm(f, s->grey[cam], &s->w[cam], &s->h[cam]);
+        fclose(f);
+    }
+    if (why != NULL) {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: %s: %s", s->dir,
+                           (unsigned)s->line, s->path, why);
+    }
+    const rp_hal_cam_cfg_t *cc = &s->cfg.cam[cam];
+    if (cc->w != 0 && (s->w[cam] != cc->w || s->h[cam] != cc->h)) {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: %s: %ux%u, configured %ux%u",
+                           s->dir, (unsigned)s->line, s->path, (unsigned)s->w[cam],
+                           (unsigned)s->h[cam], (unsigned)cc->w, (unsigned)cc->h);
+    }
+    return RP_HAL_OK;
+}
+
+static void replay_close(void *ctx)
+{
+    replay_src_t *s = (replay_src_t *)ctx;
+    if (s->frames != NULL) {
+        fclose(s->frames);
+    }
+    if (s->truth != NULL) {
+        fclose(s->truth);
+    }
+    s->frames = s->truth = NULL;
+    s->open = 0;
+}
+
+static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *err)
+{
+    replay_src_t *s = &g_replay;
+    if (s->open) {
+        return rp_hal_fail(err, RP_HAL_E_STATE, "replay: already open");
+    }
+    const char *idx = cfg->replay_index;
+    if (memchr(idx, '\0', RP_HAL_PATH_MAX) == NULL || idx[0] == '\0') {
+        return rp_hal_fail(err, RP_HAL_E_ARG, "replay: no replay_index (frames.csv or folder)");
+    }
+    memset(s, 0, sizeof *s);
+    s->cfg = *cfg;
+    s->err = err;
+    char csv[2 * RP_HAL_PATH_MAX];
+    struct stat st;
+    if (stat(idx, &st) == 0 && S_ISDIR(st.st_mode)) {
+        (void)snprintf(s->dir, sizeof s->dir, "%s", idx);
+    } else {
+        const char *slash = strrchr(idx, '/');
+        if (slash == NULL) {
+            (void)snprintf(s->dir, sizeof s->dir, ".");
+        } else {
+            (void)snprintf(s->dir, sizeof s->dir, "%.*s", (int)(slash - idx), idx);
+        }
+    }
+    size_t dl = strlen(s->dir);
+    while (dl > 1 && s->dir[dl - 1] == '/') {
+        s->dir[--dl] = '\0';
+    }
+    (void)snprintf(csv, sizeof csv, "%s/frames.csv", s->dir);
+    s->frames = fopen(csv, "r");
+    if (s->frames == NULL) {
+        return rp_hal_fail(err, RP_HAL_E_OPEN, "%s: %s", csv, strerror(errno));
+    }
+    char *f[RP_MAX_CAMS + 2];
+    const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
+    const unsigned k = r > 0 ? split(s->buf, f, RP_MAX_CAMS + 1) : 0;
+    if (r <= 0 || k < 2 || strcmp(f[0], "utime_us") != 0) {
+        replay_close(s);
+        return rp_hal_fail(err, RP_HAL_E_FORMAT,
+                           "%s:%u: header must be utime_us,cam0,cam1,...", csv,
+                           (unsigned)s->line);
+    }
+    if (k - 1 != cfg->n_cams) {
+        replay_close(s);
+        return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: %u image columns, configured %u cameras",
+                           csv, (unsigned)s->line, k - 1, (unsigned)cfg->n_cams);
+    }
+    (void)snprintf(csv, sizeof csv, "%s/truth.csv", s->dir);
+    s->truth = fopen(csv, "r");
+    if (s->truth != NULL) {
+        static const char *const want[7] = {"utime_us", "tx", "ty", "tz", "alpha", "beta",
+                                            "gamma"};
+        const int rt = next_line(s->truth, s->buf, sizeof s->buf, &s->tline);
+        unsigned kt = rt > 0 ? split(s->buf, f, 7) : 0;
+        for (unsigned i = 0; i < kt && kt == 7; i++) {
+            kt = strcmp(f[i], want[i]) == 0 ? kt : 0;
+        }
+        if (kt != 7) {
+            replay_close(s);
+            return rp_hal_fail(err, RP_HAL_E_FORMAT,
+                               "%s:%u: header must be utime_us,tx,ty,tz,alpha,beta,gamma", csv,
+                               (unsigned)s->tline);
+        }
+    }
+    s->open = 1;
+    *ctx = s;
+    return RP_HAL_OK;
+}
+
+static rp_hal_status_t replay_start(void *ctx)
+{
+    replay_src_t *s = (replay_src_t *)ctx;
+    if (s->started) {
+        return rp_hal_fail(s->err, RP_HAL_E_STATE, "replay: already started");
+    }
+    s->started = 1;
+    s->paced = 0;
+    return RP_HAL_OK;
+}
+
+static rp_hal_status_t replay_stop(void *ctx)
+{
+    replay_src_t *s = (replay_src_t *)ctx;
+    if (!s->started) {
+        return rp_hal_fail(s->err, RP_HAL_E_STATE, "replay: not started");
+    }
+    s->started = 0;
+    return RP_HAL_OK;
+}
+
+/* Advances truth.csv to the row of utime u. 1: found (into p), 0: none, -1: malformed. */
+static int truth_at(replay_src_t *s, int64_t u)
+{
+    while (s->truth != NULL && (!s->truth_have || s->truth_u < u)) {
+        char *f[8];
+        const int r = next_line(s->truth, s->buf, sizeof s->buf, &s->tline);
+        if (r == 0) {
+            fclose(s->truth);
+            s->truth = NULL;
+            s->truth_have = 0;
+            return 0;
+        }
+        if (r < 0 || split(s->buf, f, 7) != 7 || !parse_i64(f[0], &s->truth_u)) {
+            return -1;
+        }
+        for (unsigned i = 0; i < 6; i++) {
+            if (!parse_real(f[i + 1], &s->truth_p[i])) {
+                return -1;
+            }
+        }
+        s->truth_have = 1;
+    }
+    return s->truth_have && s->truth_u == u;
+}
+
+static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
+{
+    replay_src_t *s = (replay_src_t *)ctx;
+    const uint8_t n = s->cfg.n_cams;
+    if (!s->started) {
+        return rp_hal_fail(s->err, RP_HAL_E_STATE, "replay: grab before start");
+    }
+    rp_hal_set_clear(set, n);
+    const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
+    if (r == 0) {
+        return rp_hal_fail(s->err, RP_HAL_E_END, "%s/frames.csv: end after %u sets", s->dir,
+                           (unsigned)s->row);
+    }
+    char *f[RP_MAX_CAMS + 2];
+    const unsigned k = r > 0 ? split(s->buf, f, RP_MAX_CAMS + 1) : 0;
+    int64_t u = 0;
+    if (r < 0 || k != (unsigned)n + 1 || !parse_i64(f[0], &u)) {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                           "%s/frames.csv:%u: want utime_us and %u image paths", s->dir,
+                           (unsigned)s->line, (unsigned)n);
+    }
+    if (s->any_row && u <= s->last_u) {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                           "%s/frames.csv:%u: utime_us %" PRId64 " not after %" PRId64, s->dir,
+                           (unsigned)s->line, u, s->last_u);
+    }
+    s->any_row = 1;
+    s->last_u = u;
+    const uint32_t row = s->row++;
+    for (uint8_t i = 0; i < n; i++) {
+        const rp_hal_status_t st = load_image(s, i, f[i + 1]);
+        if (st != RP_HAL_OK) {
+            return st;
+        }
+    }
+    const int tr = truth_at(s, u);
+    if (tr < 0) {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/truth.csv:%u: want utime_us and 6 numbers",
+                           s->dir, (unsigned)s->tline);
+    }
+    if (s->cfg.realtime) {
+        if (!s->paced) {
+            s->u0 = u;
+            s->clock0 = rp_hal_now_us();
+            s->paced = 1;
+        }
+        rp_hal_sleep_us(s->clock0 + (u - s->u0) - rp_hal_now_us());
+    }
+    for (uint8_t i = 0; i < n; i++) {
+        rp_hal_frame_t *fr = &set->cam[i];
+        fr->img.data = s->grey[i];
+        fr->img.w = s->w[i];
+        fr->img.h = s->h[i];
+        fr->img.stride = s->w[i];
+        fr->img.size = (uint32_t)s->w[i] * s->h[i];
+        fr->utime = u;
+        fr->seq = row;
+        fr->flags = RP_HAL_CAM_OK;
+    }
+    set->utime = u;
+    set->seq = s->set_seq++;
+    if (tr > 0) {
+        set->has_truth = 1;
+        memcpy(set->truth, s->truth_p, sizeof set->truth);
+    }
+    return RP_HAL_OK;
+}
+
+const rp_hal_ops_t rp_hal_replay_ops = {"replay", replay_open, replay_start, replay_grab,
+                                        replay_stop, replay_close};

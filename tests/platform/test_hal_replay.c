@@ -1,0 +1,323 @@
+/*
+ * test_hal_replay.c - the HAL's dispatch (rp_hal_common.c) and its replay source on folders the
+ * test writes: PGM and PNG images, truth, pacing, and each kind of bad input with its error.
+ */
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <png.h>
+
+#include "rigpose/rp_hal.h"
+#include "rp_test.h"
+
+#define W 40
+#define H 30
+
+static char g_dir[64];
+
+static void write_file(const char *name, const char *text)
+{
+    char p[256];
+    snprintf(p, sizeof p, "%s/%s", g_dir, name);
+    FILE *f = fopen(p, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+/* Pixel of image `id` at (u, v): distinct per image. */
+static uint8_t pix(int id, int u, int v) { return (uint8_t)(id * 37 + u * 3 + v * 7); }
+
+static void write_pgm(const char *name, int id, int w, int h)
+{
+    char p[256];
+    snprintf(p, sizeof p, "%s/%s", g_dir, name);
+    FILE *f = fopen(p, "wb");
+    assert_non_null(f);
+    fprintf(f, "P5\n# written by test_hal_replay\n%d %d\n255\n", w, h);
+    for (int v = 0; v < h; v++) {
+        for (int u = 0; u < w; u++) {
+            fputc(pix(id, u, v), f);
+        }
+    }
+    fclose(f);
+}
+
+static void write_png(const char *name, int id)
+{
+    char p[256];
+    snprintf(p, sizeof p, "%s/%s", g_dir, name);
+    static uint8_t img[W * H];
+    for (int v = 0; v < H; v++) {
+        for (int u = 0; u < W; u++) {
+            img[v * W + u] = pix(id, u, v);
+        }
+    }
+    png_image im;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    im.width = W;
+    im.height = H;
+    im.format = PNG_FORMAT_GRAY;
+    assert_true(png_image_write_to_file(&im, p, 0, img, W, NULL));
+}
+
+static int setup_dir(void **state)
+{
+    (void)state;
+    snprintf(g_dir, sizeof g_dir, "/tmp/rp_replay_XXXXXX");
+    assert_non_null(mkdtemp(g_dir));
+    return 0;
+}
+
+static int remove_dir(void **state)
+{
+    (void)state;
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);
+    assert_int_equal(system(cmd), 0);
+    return 0;
+}
+
+static rp_hal_cfg_t replay_cfg(uint8_t n)
+{
+    rp_hal_cfg_t c;
+    memset(&c, 0, sizeof c);
+    c.kind = RP_HAL_SRC_REPLAY;
+    c.n_cams = n;
+    c.timeout_ms = 1000;
+    snprintf(c.replay_index, sizeof c.replay_index, "%s", g_dir);
+    return c;
+}
+
+static void check_image(const rp_hal_frame_t *f, int id)
+{
+    assert_non_null(f->img.data);
+    assert_int_equal(f->img.w, W);
+    assert_int_equal(f->img.h, H);
+    for (int v = 0; v < H; v++) {
+        for (int u = 0; u < W; u++) {
+            if (f->img.data[v * f->img.stride + u] != pix(id, u, v)) {
+                fail_msg("image %d differs at (%d, %d)", id, u, v);
+            }
+        }
+    }
+}
+
+/* Given a folder of PGM and PNG images with truth for some rows, every set comes back with its
+ * pixels, times, sequence numbers and truth, then RP_HAL_E_END. */
+static void test_replay_pgm_png_truth(void **state)
+{
+    (void)state;
+    write_pgm("a0.pgm", 0, W, H);
+    write_png("b0.png", 1);
+    write_png("a1.png", 2);
+    write_pgm("b1.pgm", 3, W, H);
+    write_pgm("a2.pgm", 4, W, H);
+    write_pgm("b2.pgm", 5, W, H);
+    write_file("frames.csv", "utime_us,cam0,cam1\n1000,a0.pgm,b0.png\n\n# comment\n"
+                             "34333,a1.png,b1.pgm\r\n67666, a2.pgm , b2.pgm\n");
+    write_file("truth.csv", "utime_us,tx,ty,tz,alpha,beta,gamma\n1000,1,2,3,0.1,0.2,0.3\n"
+                            "67666,4,5,6,0.4,0.5,0.6\n");
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    cfg.cam[0].w = W;
+    cfg.cam[0].h = H;
+    rp_hal_source_t *src;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_STATE);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    const int64_t want_u[3] = {1000, 34333, 67666};
+    for (int j = 0; j < 3; j++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_int_equal(set.n_cams, 2);
+        assert_int_equal(set.seq, j);
+        assert_true(set.utime == want_u[j]);
+        for (int i = 0; i < 2; i++) {
+            assert_int_equal(set.cam[i].flags, RP_HAL_CAM_OK);
+            assert_int_equal(set.cam[i].seq, j);
+            assert_true(set.cam[i].utime == want_u[j]);
+            check_image(&set.cam[i], 2 * j + i);
+        }
+        assert_int_equal(set.has_truth, j != 1);
+        if (j == 2) {
+            assert_near(set.truth[0], 4.0, RP_TOL_TIGHT);
+            assert_near(set.truth[5], 0.6, RP_TOL_TIGHT);
+        }
+    }
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    assert_non_null(strstr(rp_hal_errmsg(src), "end after 3 sets"));
+    assert_int_equal(rp_hal_stop(src), RP_HAL_OK);
+    rp_hal_close(src);
+}
+
+/* Given frames.csv naming an image that does not exist, the grab fails with E_OPEN naming the
+ * file and line, and the next grab goes on with the next row. */
+static void test_replay_missing_image(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0\n10,x.pgm\n20,nothere.pgm\n30,x.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_OPEN);
+    printf("missing image: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:3"));
+    assert_non_null(strstr(rp_hal_errmsg(src), "nothere.pgm"));
+    assert_int_equal(set.cam[0].flags, RP_HAL_CAM_MISSING);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 30);
+    assert_int_equal(set.cam[0].seq, 2);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    rp_hal_close(src);
+}
+
+/* Each malformed frames.csv gives E_FORMAT with the file and line in the message. */
+static void test_replay_malformed_csv(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+
+    write_file("frames.csv", "time,cam0,cam1\n10,x.pgm,x.pgm\n");
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_FORMAT);
+    assert_null(src);
+    printf("bad header: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "frames.csv:1"));
+
+    write_file("frames.csv", "utime_us,cam0\n10,x.pgm\n");
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_FORMAT);
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "1 image columns, configured 2"));
+
+    const char *bad_rows[3] = {"10,x.pgm\n", "1x0,x.pgm,x.pgm\n", "5,x.pgm,x.pgm,x.pgm\n"};
+    for (int k = 0; k < 3; k++) {
+        char text[128];
+        snprintf(text, sizeof text, "utime_us,cam0,cam1\n1,x.pgm,x.pgm\n%s", bad_rows[k]);
+        write_file("frames.csv", text);
+        assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+        assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+        printf("bad row %d: %s\n", k, rp_hal_errmsg(src));
+        assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:3"));
+        rp_hal_close(src);
+    }
+
+    write_file("frames.csv", "utime_us,cam0,cam1\n10,x.pgm,x.pgm\n10,x.pgm,x.pgm\n");
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    assert_non_null(strstr(rp_hal_errmsg(src), "not after"));
+    rp_hal_close(src);
+
+    remove("frames.csv");
+    char p[128];
+    snprintf(p, sizeof p, "%s/frames.csv", g_dir);
+    remove(p);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "frames.csv"));
+}
+
+/* Malformed images (truncated PGM, 16-bit PGM, a text file, a wrong size) give E_FORMAT. */
+static void test_replay_malformed_images(void **state)
+{
+    (void)state;
+    write_pgm("ok.pgm", 0, W, H);
+    write_pgm("small.pgm", 0, W / 2, H);
+    write_file("short.pgm", "P5\n40 30\n255\nabc");
+    write_file("deep.pgm", "P5\n40 30\n65535\n");
+    write_file("text.png", "hello");
+    write_file("frames.csv", "utime_us,cam0\n1,short.pgm\n2,deep.pgm\n3,text.png\n4,small.pgm\n"
+                             "5,ok.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    cfg.cam[0].w = W;
+    cfg.cam[0].h = H;
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    for (int k = 0; k < 4; k++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+        printf("bad image %d: %s\n", k, rp_hal_errmsg(src));
+    }
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    rp_hal_close(src);
+}
+
+/* With realtime, sets come at their recorded spacing (40 ms apart here). */
+static void test_replay_realtime(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0\n500000,x.pgm\n540000,x.pgm\n580000,x.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    cfg.realtime = 1;
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/frames.csv", g_dir);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    const int64_t t0 = rp_hal_now_us();
+    for (int j = 0; j < 3; j++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    }
+    const int64_t dt = rp_hal_now_us() - t0;
+    printf("realtime replay: 3 sets 40 ms apart took %.1f ms\n", (double)dt / 1000.0);
+    assert_true(dt >= 79000 && dt < 400000);
+    rp_hal_close(src);
+}
+
+/* The dispatch: bad arguments, one source at a time, status strings. */
+static void test_hal_dispatch(void **state)
+{
+    (void)state;
+    rp_hal_source_t *src = NULL;
+    rp_hal_cfg_t cfg = replay_cfg(0);
+    assert_int_equal(rp_hal_open(NULL, &cfg), RP_HAL_E_ARG);
+    assert_int_equal(rp_hal_open(&src, NULL), RP_HAL_E_ARG);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_ARG);
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "n_cams"));
+    cfg.n_cams = 1;
+    cfg.kind = (rp_hal_kind_t)7;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_ARG);
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0\n1,x.pgm\n");
+    cfg = replay_cfg(1);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    rp_hal_source_t *second;
+    assert_int_equal(rp_hal_open(&second, &cfg), RP_HAL_E_STATE);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_E_STATE);
+    assert_int_equal(rp_hal_grab(src, NULL), RP_HAL_E_ARG);
+    rp_hal_close(src);
+    rp_hal_close(NULL);
+    assert_int_equal(rp_hal_start(NULL), RP_HAL_E_ARG);
+    for (int s = RP_HAL_OK; s <= RP_HAL_E_STATE; s++) {
+        assert_true(strlen(rp_hal_status_str((rp_hal_status_t)s)) > 1);
+    }
+    const int64_t a = rp_hal_now_us();
+    rp_hal_sleep_us(2000);
+    assert_true(rp_hal_now_us() - a >= 2000);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_replay_pgm_png_truth, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_missing_image, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_malformed_csv, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_malformed_images, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_realtime, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_hal_dispatch, setup_dir, remove_dir),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,253 @@
+/*
+ * test_hal_v4l2.c - the v4l2 source's pure parts (rp_hal_v4l2.h): YUYV / UYVY / JPEG to grey,
+ * drop counting from sequence numbers, grouping by timestamp; and its errors without a device.
+ * The source against a real driver is tests/vm/ (vivid in a VM).
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <jpeglib.h>
+
+#include "rigpose/rp_hal.h"
+#include "rigpose/rp_hal_v4l2.h"
+#include "rp_test.h"
+
+static uint8_t rnd8(void) { return (uint8_t)rp_test_urand(0.0, 256.0); }
+
+/* Given YUYV rows with padding, the grey image is exactly the Y bytes, for even and odd w. */
+static void test_yuyv_uyvy_to_grey(void **state)
+{
+    (void)state;
+    enum { MW = 37, MH = 5, STRIDE = 2 * MW + 6 };
+    static uint8_t src[STRIDE * MH], dst[MW * MH];
+    for (size_t i = 0; i < sizeof src; i++) {
+        src[i] = rnd8();
+    }
+    const uint16_t widths[2] = {36, 37};
+    for (int k = 0; k < 2; k++) {
+        const uint16_t w = widths[k];
+        memset(dst, 0, sizeof dst);
+        assert_int_equal(rp_hal_yuyv_to_grey(src, STRIDE, w, MH, dst, w), RP_HAL_OK);
+        for (int v = 0; v < MH; v++) {
+            for (int u = 0; u < w; u++) {
+                assert_int_equal(dst[v * w + u], src[v * STRIDE + 2 * u]);
+            }
+        }
+        assert_int_equal(rp_hal_uyvy_to_grey(src, STRIDE, w, MH, dst, w), RP_HAL_OK);
+        for (int v = 0; v < MH; v++) {
+            for (int u = 0; u < w; u++) {
+                assert_int_equal(dst[v * w + u], src[v * STRIDE + 2 * u + 1]);
+            }
+        }
+    }
+    assert_int_equal(rp_hal_yuyv_to_grey(src, 2 * MW - 1, MW, MH, dst, MW), RP_HAL_E_ARG);
+    assert_int_equal(rp_hal_yuyv_to_grey(src, STRIDE, MW, MH, dst, MW - 1), RP_HAL_E_ARG);
+    assert_int_equal(rp_hal_yuyv_to_grey(NULL, STRIDE, MW, MH, dst, MW), RP_HAL_E_ARG);
+}
+
+/* A JPEG of w x h made with libjpeg (grey, or colour as MJPEG cameras send). */
+static size_t make_jpeg(const uint8_t *grey, int w, int h, int colour, uint8_t **out)
+{
+    struct jpeg_compress_struct c;
+    struct jpeg_error_mgr e;
+    c.err = jpeg_std_error(&e);
+    jpeg_create_compress(&c);
+    unsigned long n = 0;
+    *out = NULL;
+    jpeg_mem_dest(&c, out, &n);
+    c.image_width = (JDIMENSION)w;
+    c.image_height = (JDIMENSION)h;
+    c.input_components = colour ? 3 : 1;
+    c.in_color_space = colour ? JCS_RGB : JCS_GRAYSCALE;
+    jpeg_set_defaults(&c);
+    jpeg_set_quality(&c, 95, TRUE);
+    jpeg_start_compress(&c, TRUE);
+    static uint8_t row[3 * 256];
+    while (c.next_scanline < c.image_height) {
+        const uint8_t *g = grey + (size_t)c.next_scanline * (size_t)w;
+        for (int u = 0; u < w; u++) {
+            for (int k = 0; k < 3; k++) {
+                row[3 * u + k] = g[u];
+            }
+            if (!colour) {
+                row[u] = g[u];
+            }
+        }
+        JSAMPROW r = row;
+        jpeg_write_scanlines(&c, &r, 1);
+    }
+    jpeg_finish_compress(&c);
+    jpeg_destroy_compress(&c);
+    return (size_t)n;
+}
+
+/* Given a smooth image as grey and as colour JPEG, decoding gives it back within JPEG error;
+ * another size or a cut stream is E_FORMAT. */
+static void test_jpeg_to_grey(void **state)
+{
+    (void)state;
+    enum { JW = 64, JH = 48 };
+    static uint8_t img[JW * JH], dst[JW * JH];
+    for (int v = 0; v < JH; v++) {
+        for (int u = 0; u < JW; u++) {
+            img[v * JW + u] = (uint8_t)(128.0 + 100.0 * sin(u * 0.2) * cos(v * 0.15));
+        }
+    }
+    for (int colour = 0; colour < 2; colour++) {
+        uint8_t *jpg;
+        const size_t n = make_jpeg(img, JW, JH, colour, &jpg);
+        assert_int_equal(rp_hal_jpeg_to_grey(jpg, n, JW, JH, dst, sizeof dst), RP_HAL_OK);
+        int worst = 0;
+        for (int i = 0; i < JW * JH; i++) {
+            const int d = abs((int)dst[i] - (int)img[i]);
+            worst = d > worst ? d : worst;
+        }
+        printf("jpeg (%s, %zu bytes) to grey: max error %d grey levels\n",
+               colour ? "colour" : "grey", n, worst);
+        assert_true(worst <= 8);
+        assert_int_equal(rp_hal_jpeg_to_grey(jpg, n, JW - 2, JH, dst, sizeof dst),
+                         RP_HAL_E_FORMAT);
+        assert_int_equal(rp_hal_jpeg_to_grey(jpg, n / 3, JW, JH, dst, sizeof dst),
+                         RP_HAL_E_FORMAT); /* cut: libjpeg warns and pads; we refuse */
+        memset(jpg + 2, 0x55, 40); /* header destroyed */
+        assert_int_equal(rp_hal_jpeg_to_grey(jpg, n, JW, JH, dst, sizeof dst), RP_HAL_E_FORMAT);
+        free(jpg);
+    }
+    const uint8_t junk[16] = {1, 2, 3};
+    assert_int_equal(rp_hal_jpeg_to_grey(junk, sizeof junk, 8, 8, dst, sizeof dst),
+                     RP_HAL_E_FORMAT);
+    assert_int_equal(rp_hal_jpeg_to_grey(junk, sizeof junk, 8, 8, dst, 10), RP_HAL_E_ARG);
+}
+
+/* Given sequence numbers with gaps, repeats and a restart, only the gaps count as drops. */
+static void test_seq_drops(void **state)
+{
+    (void)state;
+    rp_hal_seq_t s;
+    memset(&s, 0, sizeof s);
+    const uint32_t seq[10] = {7, 8, 9, 12, 12, 13, 20, 0, 1, 3};
+    const uint32_t skipped[10] = {0, 0, 0, 2, 0, 0, 6, 0, 0, 1};
+    for (int i = 0; i < 10; i++) {
+        assert_int_equal(rp_hal_seq_update(&s, seq[i]), skipped[i]);
+    }
+    assert_int_equal(s.drops, 9);
+    assert_int_equal(s.repeats, 1);
+    assert_int_equal(s.last, 3);
+}
+
+/* Given pending frame times, the newest anchors the set and only frames within tol join. */
+static void test_group(void **state)
+{
+    (void)state;
+    const int64_t t[4] = {1000, 1500, 30000, 26000};
+    const uint8_t all[4] = {1, 1, 1, 1};
+    uint8_t in[4];
+    int64_t anchor;
+    assert_int_equal(rp_hal_group(t, all, 4, 5000, in, &anchor), 2);
+    assert_true(anchor == 30000);
+    assert_int_equal(in[0], 0);
+    assert_int_equal(in[1], 0);
+    assert_int_equal(in[2], 1);
+    assert_int_equal(in[3], 1);
+    assert_int_equal(rp_hal_group(t, all, 4, 29000, in, &anchor), 4);
+    const uint8_t some[4] = {1, 1, 0, 0};
+    assert_int_equal(rp_hal_group(t, some, 4, 5000, in, &anchor), 2);
+    assert_true(anchor == 1500);
+    assert_int_equal(in[2], 0);
+    const uint8_t none[4] = {0, 0, 0, 0};
+    assert_int_equal(rp_hal_group(t, none, 4, 5000, in, &anchor), 0);
+    assert_true(anchor == 0);
+}
+
+/* Four free-running cameras at 25 fps with random phase and 1 ms jitter, 2 % of frames lost:
+ * the grab policy (newest frame per camera, stale ones wait for their next) forms sets whose
+ * spread stays within the tolerance, and every camera lands in almost every set. */
+static void test_group_free_running(void **state)
+{
+    (void)state;
+    enum { NC = 4, PERIOD = 40000, TOL = 40000 };
+    int64_t phase[NC], next[NC], t[NC] = {0};
+    uint8_t have[NC] = {0}, in[NC];
+    uint32_t k_frame[NC] = {0};
+    for (int i = 0; i < NC; i++) {
+        phase[i] = (int64_t)rp_test_urand(0.0, PERIOD);
+        next[i] = phase[i];
+    }
+    int sets = 0, full = 0;
+    int64_t worst_spread = 0;
+    for (int64_t now = 0; now < 20 * 1000000; now += 1000) {
+        for (int i = 0; i < NC; i++) {
+            if (now >= next[i]) {
+                k_frame[i]++;
+                if (rp_test_urand(0.0, 1.0) > 0.02) {
+                    t[i] = next[i];
+                    have[i] = 1;
+                }
+                next[i] = phase[i] + (int64_t)k_frame[i] * PERIOD +
+                          (int64_t)rp_test_urand(-1000.0, 1000.0);
+            }
+        }
+        int64_t anchor;
+        const uint8_t k = rp_hal_group(t, have, NC, TOL, in, &anchor);
+        for (int i = 0; i < NC; i++) {
+            if (have[i] && !in[i]) {
+                have[i] = 0;
+            }
+        }
+        if (k == NC) {
+            int64_t lo = anchor;
+            for (int i = 0; i < NC; i++) {
+                lo = t[i] < lo ? t[i] : lo;
+                have[i] = 0;
+            }
+            worst_spread = anchor - lo > worst_spread ? anchor - lo : worst_spread;
+            sets++;
+            full++;
+        }
+    }
+    printf("free-running grouping: %d complete sets in 20 s at 25 fps (500 max), worst spread "
+           "%.1f ms\n", full, (double)worst_spread / 1000.0);
+    assert_true(worst_spread <= TOL);
+    assert_true(sets >= 400);
+}
+
+/* Without a device: a missing node or a file that is no V4L2 device is E_OPEN naming it; a bad
+ * configuration is E_ARG. */
+static void test_v4l2_open_errors(void **state)
+{
+    (void)state;
+    rp_hal_cfg_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.kind = RP_HAL_SRC_V4L2;
+    cfg.n_cams = 1;
+    cfg.sync_tol_us = 5000;
+    cfg.timeout_ms = 100;
+    cfg.retry_ms = 100;
+    snprintf(cfg.cam[0].device, sizeof cfg.cam[0].device, "/dev/rigpose-no-such-video");
+    rp_hal_source_t *src;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("v4l2 open: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "/dev/rigpose-no-such-video"));
+    snprintf(cfg.cam[0].device, sizeof cfg.cam[0].device, "/dev/null");
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("v4l2 open: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "not a V4L2 device"));
+    cfg.cam[0].device[0] = '\0';
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_ARG);
+    cfg.timeout_ms = 0;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_ARG);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_yuyv_uyvy_to_grey),
+        cmocka_unit_test(test_jpeg_to_grey),
+        cmocka_unit_test(test_seq_drops),
+        cmocka_unit_test(test_group),
+        cmocka_unit_test(test_group_free_running),
+        cmocka_unit_test(test_v4l2_open_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
