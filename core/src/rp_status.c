@@ -16,6 +16,7 @@ const char *rp_status_str(rp_status_t s)
         [RP_E_RANGE] = "value out of range",
         [RP_E_OUTSIDE] = "outside the image",
         [RP_E_DEGENERATE] = "degenerate geometry",
+        [RP_E_NOT_FOUND] = "not found",
     };
     if ((unsigned)s >= (unsigned)RP_E_COUNT_) {
         return "unknown status";

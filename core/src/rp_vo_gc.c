@@ -6,9 +6,6 @@
 #include "priv/rp_math.h"
 #include "rigpose/rp_vo_gc.h"
 
-#define LM_CAP RP_MAX_LANDMARKS
-#define LM_MAX_FILL ((LM_CAP / 4) * 3)
-
 /* Prior standard deviations of the velocity when the filter starts (m/s, rad/s). */
 #define START_SIGMA_V RP_C(1.0)
 #define START_SIGMA_W RP_C(1.0)
@@ -31,98 +28,36 @@ rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void)
     return c;
 }
 
-/* ---- landmark table (hash on id, linear probing, backward-shift deletion) ----------------- */
-
-static uint32_t hash_id(uint32_t id)
-{
-    id ^= id >> 16;
-    id *= 0x7feb352dU;
-    id ^= id >> 15;
-    id *= 0x846ca68bU;
-    id ^= id >> 16;
-    return id;
-}
+/* ---- landmark records, found by id through vo->map ------------------------------------- */
 
 static rp_gc_landmark_t *lm_find(rp_vo_gc_t *vo, uint32_t id)
 {
-    uint32_t i = hash_id(id) & (LM_CAP - 1);
-    while (vo->lm[i].id != RP_VO_GC_EMPTY_ID) {
-        if (vo->lm[i].id == id) {
-            return &vo->lm[i];
-        }
-        i = (i + 1) & (LM_CAP - 1);
-    }
-    return NULL;
+    uint16_t slot;
+    return rp_idmap_find(&vo->map, id, &slot) == RP_OK ? &vo->lm[slot] : NULL;
 }
 
 static rp_status_t lm_insert(rp_vo_gc_t *vo, uint32_t id, uint8_t cam, const rp_point3_t *pt)
 {
-    if (vo->n_lm >= LM_MAX_FILL) {
-        return RP_E_FULL;
+    uint16_t slot;
+    rp_status_t st = rp_idmap_insert(&vo->map, id, cam, &slot);
+    if (st == RP_OK) {
+        rp_gc_landmark_t *l = &vo->lm[slot];
+        memset(l, 0, sizeof(*l));
+        l->cam = cam;
+        l->pt = *pt;
     }
-    uint32_t i = hash_id(id) & (LM_CAP - 1);
-    while (vo->lm[i].id != RP_VO_GC_EMPTY_ID) {
-        if (vo->lm[i].id == id) {
-            return RP_E_ARG; /* already held */
-        }
-        i = (i + 1) & (LM_CAP - 1);
-    }
-    rp_gc_landmark_t *l = &vo->lm[i];
-    memset(l, 0, sizeof(*l));
-    l->id = id;
-    l->cam = cam;
-    l->pt = *pt;
-    vo->n_lm++;
-    vo->n_lm_cam[cam]++;
-    return RP_OK;
-}
-
-static void lm_remove_slot(rp_vo_gc_t *vo, uint32_t i)
-{
-    vo->n_lm--;
-    vo->n_lm_cam[vo->lm[i].cam]--;
-    uint32_t hole = i;
-    uint32_t j = i;
-    for (;;) {
-        j = (j + 1) & (LM_CAP - 1);
-        if (vo->lm[j].id == RP_VO_GC_EMPTY_ID) {
-            break;
-        }
-        uint32_t home = hash_id(vo->lm[j].id) & (LM_CAP - 1);
-        int in_range = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
-        if (!in_range) {
-            vo->lm[hole] = vo->lm[j];
-            hole = j;
-        }
-    }
-    vo->lm[hole].id = RP_VO_GC_EMPTY_ID;
-}
-
-static void lm_clear(rp_vo_gc_t *vo)
-{
-    for (uint32_t i = 0; i < LM_CAP; ++i) {
-        vo->lm[i].id = RP_VO_GC_EMPTY_ID;
-    }
-    vo->n_lm = 0;
-    memset(vo->n_lm_cam, 0, sizeof(vo->n_lm_cam));
+    return st;
 }
 
 /* Drop every landmark not seen this frame whose camera delivered an image (its track was
  * lost); landmarks of cameras without an image are kept. Clears the marks. */
 static void lm_drop_lost(rp_vo_gc_t *vo, const uint8_t had_image[RP_MAX_CAMS])
 {
-    uint32_t i = 0;
-    while (i < LM_CAP) {
-        rp_gc_landmark_t *l = &vo->lm[i];
-        if (l->id != RP_VO_GC_EMPTY_ID && !l->seen && had_image[l->cam]) {
-            lm_remove_slot(vo, i);
-            continue; /* slot i now holds a shifted entry (or is empty): look again */
-        }
-        ++i;
+    uint32_t mask = 0;
+    for (uint32_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        mask |= had_image[cam] ? (1u << cam) : 0u;
     }
-    for (i = 0; i < LM_CAP; ++i) {
-        vo->lm[i].seen = 0;
-    }
+    (void)rp_idmap_drop_unmarked(&vo->map, mask, NULL);
 }
 
 /* ---- set-up ------------------------------------------------------------------------------ */
@@ -180,7 +115,7 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
     vo->rig = rig;
     vo->cfg = *cfg;
     vo->ekf = probe;
-    lm_clear(vo);
+    (void)rp_idmap_clear(&vo->map);
     return RP_OK;
 }
 
@@ -381,7 +316,7 @@ static uint32_t gather_obs(rp_vo_gc_t *vo, const rp_frameset_t *fs)
             if (!l || l->cam != cam) {
                 continue;
             }
-            l->seen = 1;
+            (void)rp_idmap_mark(&vo->map, (uint16_t)(l - vo->lm));
             rp_obs_t *o = &vo->obs[n];
             o->uv[0] = ft->uv[0];
             o->uv[1] = ft->uv[1];
@@ -422,7 +357,7 @@ static void fill_estimate(const rp_vo_gc_t *vo, const rp_frameset_t *fs, uint32_
         est->cov[(3 + i) * 6 + 3 + i] += r2;
     }
     est->flags = flags;
-    est->n_landmarks = vo->n_lm;
+    est->n_landmarks = vo->map.n;
 }
 
 static rp_status_t validate_frameset(const rp_vo_gc_t *vo, const rp_frameset_t *fs)
@@ -454,13 +389,13 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
     static const rp_real zero[6] = {0};
     rp_pose_lin_t pl;
     (void)rp_pose_lin_set(&pl, zero);
-    lm_clear(vo);
+    (void)rp_idmap_clear(&vo->map);
     start_ekf(vo);
     uint32_t flags = RP_EST_INITIALISING;
     for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
         const uint8_t cam = vo->cfg.cams[k];
         (void)top_up_camera(vo, fs, cam, &pl, NULL);
-        if (vo->n_lm_cam[cam] < vo->cfg.min_tracked) {
+        if (vo->map.n_group[cam] < vo->cfg.min_tracked) {
             flags |= RP_EST_DEGRADED;
         }
     }
@@ -468,7 +403,7 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
     vo->prev_utime = fs->utime;
     fill_estimate(vo, fs, flags | RP_EST_SCALE_WEAK, est);
     est->frame = 0;
-    return vo->n_lm >= 6 ? RP_OK : RP_E_TOO_FEW;
+    return vo->map.n >= 6 ? RP_OK : RP_E_TOO_FEW;
 }
 
 /* Weights and maturity of the gathered observations at the predicted pose; fills vo->pobs
@@ -631,7 +566,7 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
         pose_cov(vo, Ppp);
         for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
             const uint8_t cam = vo->cfg.cams[k];
-            if (vo->n_lm_cam[cam] < vo->cfg.min_tracked && had_image[cam]) {
+            if (vo->map.n_group[cam] < vo->cfg.min_tracked && had_image[cam]) {
                 if (top_up_camera(vo, fs, cam, &pl, Ppp) > 0) {
                     flags |= RP_EST_REINIT;
                 }
@@ -639,7 +574,7 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
         }
     }
     for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
-        if (vo->n_lm_cam[vo->cfg.cams[k]] < vo->cfg.min_tracked || !had_image[vo->cfg.cams[k]]) {
+        if (vo->map.n_group[vo->cfg.cams[k]] < vo->cfg.min_tracked || !had_image[vo->cfg.cams[k]]) {
             flags |= RP_EST_DEGRADED;
         }
     }

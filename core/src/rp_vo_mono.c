@@ -8,9 +8,6 @@
 #include "rigpose/rp_rot.h"
 #include "rigpose/rp_vo_mono.h"
 
-#define LM_CAP RP_MAX_LANDMARKS
-#define LM_MAX_FILL ((LM_CAP / 4) * 3)
-
 #define START_SIGMA_V RP_C(1.0)
 #define START_SIGMA_W RP_C(1.0)
 
@@ -28,94 +25,28 @@ rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void)
     return c;
 }
 
-/* ---- landmark table (as rp_vo_stereo.c: linear probing, backward-shift deletion) --------- */
-
-static uint32_t hash_id(uint32_t id)
-{
-    id ^= id >> 16;
-    id *= 0x7feb352dU;
-    id ^= id >> 15;
-    id *= 0x846ca68bU;
-    id ^= id >> 16;
-    return id;
-}
+/* ---- landmark records, found by id through vo->map ------------------------------------- */
 
 static rp_mono_landmark_t *lm_find(rp_vo_mono_t *vo, uint32_t id)
 {
-    uint32_t i = hash_id(id) & (LM_CAP - 1);
-    while (vo->lm[i].id != RP_VO_MONO_EMPTY_ID) {
-        if (vo->lm[i].id == id) {
-            return &vo->lm[i];
-        }
-        i = (i + 1) & (LM_CAP - 1);
-    }
-    return NULL;
+    uint16_t slot;
+    return rp_idmap_find(&vo->map, id, &slot) == RP_OK ? &vo->lm[slot] : NULL;
 }
 
 static rp_status_t lm_insert(rp_vo_mono_t *vo, uint32_t id, const rp_point3_t *pt)
 {
-    if (vo->n_lm >= LM_MAX_FILL) {
-        return RP_E_FULL;
+    uint16_t slot;
+    rp_status_t st = rp_idmap_insert(&vo->map, id, 0, &slot);
+    if (st == RP_OK) {
+        vo->lm[slot].pt = *pt;
     }
-    uint32_t i = hash_id(id) & (LM_CAP - 1);
-    while (vo->lm[i].id != RP_VO_MONO_EMPTY_ID) {
-        if (vo->lm[i].id == id) {
-            return RP_E_ARG;
-        }
-        i = (i + 1) & (LM_CAP - 1);
-    }
-    vo->lm[i].id = id;
-    vo->lm[i].seen = 0;
-    vo->lm[i].pt = *pt;
-    vo->n_lm++;
-    return RP_OK;
+    return st;
 }
 
-static void lm_remove_slot(rp_vo_mono_t *vo, uint32_t i)
+static void lm_mark_seen(rp_vo_mono_t *vo, const rp_mono_landmark_t *l)
 {
-    vo->n_lm--;
-    uint32_t hole = i;
-    uint32_t j = i;
-    for (;;) {
-        j = (j + 1) & (LM_CAP - 1);
-        if (vo->lm[j].id == RP_VO_MONO_EMPTY_ID) {
-            break;
-        }
-        uint32_t home = hash_id(vo->lm[j].id) & (LM_CAP - 1);
-        int in_range = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
-        if (!in_range) {
-            vo->lm[hole] = vo->lm[j];
-            hole = j;
-        }
-    }
-    vo->lm[hole].id = RP_VO_MONO_EMPTY_ID;
+    (void)rp_idmap_mark(&vo->map, (uint16_t)(l - vo->lm));
 }
-
-static void lm_clear(rp_vo_mono_t *vo)
-{
-    for (uint32_t i = 0; i < LM_CAP; ++i) {
-        vo->lm[i].id = RP_VO_MONO_EMPTY_ID;
-        vo->lm[i].seen = 0;
-    }
-    vo->n_lm = 0;
-}
-
-static void lm_drop_unseen(rp_vo_mono_t *vo)
-{
-    uint32_t i = 0;
-    while (i < LM_CAP) {
-        if (vo->lm[i].id != RP_VO_MONO_EMPTY_ID && !vo->lm[i].seen) {
-            lm_remove_slot(vo, i);
-            continue;
-        }
-        ++i;
-    }
-    for (i = 0; i < LM_CAP; ++i) {
-        vo->lm[i].seen = 0;
-    }
-}
-
-/* ---- set-up ------------------------------------------------------------------------------ */
 
 rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_mono_cfg_t *cfg)
 {
@@ -146,7 +77,7 @@ rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_m
     if (st != RP_OK) {
         return st;
     }
-    lm_clear(vo);
+    (void)rp_idmap_clear(&vo->map);
     return RP_OK;
 }
 
@@ -327,7 +258,7 @@ static void fill_estimates(const rp_vo_mono_t *vo, int64_t utime, uint32_t flags
         }
     }
     e.flags = flags | RP_EST_SCALE_WEAK; /* a single camera's scale is the assumed depth's */
-    e.n_landmarks = vo->n_lm;
+    e.n_landmarks = vo->map.n;
     if (own) {
         *own = e;
     }
@@ -372,7 +303,7 @@ static rp_status_t first_frame(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_est
                                rp_estimate_t *own)
 {
     static const rp_real zero[6] = {0};
-    lm_clear(vo);
+    (void)rp_idmap_clear(&vo->map);
     const uint16_t added = add_features(vo, fs->f[vo->cfg.cam], fs->n[vo->cfg.cam], zero, NULL);
     rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
     for (int i = 0; i < 6; ++i) {
@@ -477,18 +408,18 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
     }
     uint32_t n = gather_obs(vo, fs, vo->ekf.x);
     for (uint32_t i = 0; i < n; ++i) {
-        lm_find(vo, vo->obs_id[i])->seen = 1;
+        lm_mark_seen(vo, lm_find(vo, vo->obs_id[i]));
     }
-    lm_drop_unseen(vo);
+    (void)rp_idmap_drop_unmarked(&vo->map, RP_IDMAP_ALL_GROUPS, NULL);
 
     /* Step (5): under the threshold, backtrack one frame and add the previous frame's features
      * (still tracked now) at the previous pose. */
-    if (vo->n_lm < vo->cfg.min_tracked) {
+    if (vo->map.n < vo->cfg.min_tracked) {
         (void)add_features(vo, vo->prev, vo->n_prev, vo->prev_p, fs);
         flags |= RP_EST_REINIT;
         n = gather_obs(vo, fs, vo->ekf.x);
     }
-    if (vo->n_lm < vo->cfg.min_tracked) {
+    if (vo->map.n < vo->cfg.min_tracked) {
         flags |= RP_EST_DEGRADED;
     }
 
@@ -515,17 +446,16 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
                 n_used++;
                 rp_mono_landmark_t *l = lm_find(vo, vo->obs_id[i]);
                 if (l) {
-                    l->seen = 1;
+                    lm_mark_seen(vo, l);
                 }
             }
         }
         if (n_gated > 0) {
             flags |= RP_EST_GATED;
-            lm_drop_unseen(vo); /* a landmark whose observation was gated is an outlier */
+            /* a landmark whose observation was gated is an outlier */
+            (void)rp_idmap_drop_unmarked(&vo->map, RP_IDMAP_ALL_GROUPS, NULL);
         } else {
-            for (uint32_t i = 0; i < LM_CAP; ++i) {
-                vo->lm[i].seen = 0;
-            }
+            (void)rp_idmap_clear_marks(&vo->map);
         }
     } else {
         flags |= RP_EST_LOST;

@@ -7,8 +7,6 @@
 #include "priv/rp_math.h"
 #include "rigpose/rp_vo_stereo.h"
 
-#define LM_CAP RP_MAX_LANDMARKS
-#define LM_MAX_FILL ((LM_CAP / 4) * 3)
 #define MATCH_CAP (2 * RP_MAX_FEATS_PER_CAM)
 
 /* Prior standard deviations of the velocity when the filter starts (m/s, rad/s). */
@@ -30,99 +28,27 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     return c;
 }
 
-/* ---- landmark table (hash on id, linear probing, backward-shift deletion) ----------------- */
-
-static uint32_t hash_id(uint32_t id)
-{
-    id ^= id >> 16;
-    id *= 0x7feb352dU;
-    id ^= id >> 15;
-    id *= 0x846ca68bU;
-    id ^= id >> 16;
-    return id;
-}
+/* ---- landmark records, found by id through vo->map ------------------------------------- */
 
 static rp_landmark_t *lm_find(rp_vo_stereo_t *vo, uint32_t id)
 {
-    uint32_t i = hash_id(id) & (LM_CAP - 1);
-    while (vo->lm[i].id != RP_VO_EMPTY_ID) {
-        if (vo->lm[i].id == id) {
-            return &vo->lm[i];
-        }
-        i = (i + 1) & (LM_CAP - 1);
-    }
-    return NULL;
+    uint16_t slot;
+    return rp_idmap_find(&vo->map, id, &slot) == RP_OK ? &vo->lm[slot] : NULL;
 }
 
 static rp_status_t lm_insert(rp_vo_stereo_t *vo, uint32_t id, uint8_t pair, const rp_point3_t *pt)
 {
-    if (vo->n_lm >= LM_MAX_FILL) {
-        return RP_E_FULL;
+    uint16_t slot;
+    rp_status_t st = rp_idmap_insert(&vo->map, id, pair, &slot);
+    if (st == RP_OK) {
+        vo->lm[slot].pt = *pt;
     }
-    uint32_t i = hash_id(id) & (LM_CAP - 1);
-    while (vo->lm[i].id != RP_VO_EMPTY_ID) {
-        if (vo->lm[i].id == id) {
-            return RP_E_ARG; /* already held */
-        }
-        i = (i + 1) & (LM_CAP - 1);
-    }
-    rp_landmark_t *l = &vo->lm[i];
-    l->id = id;
-    l->pair = pair;
-    l->seen = 0;
-    l->pt = *pt;
-    vo->n_lm++;
-    vo->n_lm_pair[pair]++;
-    return RP_OK;
+    return st;
 }
 
-/* Remove slot i, shifting later members of its probe run back so lookups stay correct. */
-static void lm_remove_slot(rp_vo_stereo_t *vo, uint32_t i)
+static void lm_mark_seen(rp_vo_stereo_t *vo, const rp_landmark_t *l)
 {
-    vo->n_lm--;
-    vo->n_lm_pair[vo->lm[i].pair]--;
-    uint32_t hole = i;
-    uint32_t j = i;
-    for (;;) {
-        j = (j + 1) & (LM_CAP - 1);
-        if (vo->lm[j].id == RP_VO_EMPTY_ID) {
-            break;
-        }
-        uint32_t home = hash_id(vo->lm[j].id) & (LM_CAP - 1);
-        /* j may move to the hole if its home is not cyclically inside (hole, j]. */
-        int in_range = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
-        if (!in_range) {
-            vo->lm[hole] = vo->lm[j];
-            hole = j;
-        }
-    }
-    vo->lm[hole].id = RP_VO_EMPTY_ID;
-}
-
-static void lm_clear(rp_vo_stereo_t *vo)
-{
-    for (uint32_t i = 0; i < LM_CAP; ++i) {
-        vo->lm[i].id = RP_VO_EMPTY_ID;
-    }
-    vo->n_lm = 0;
-    memset(vo->n_lm_pair, 0, sizeof(vo->n_lm_pair));
-}
-
-/* Drop every landmark not seen this frame, and clear the marks of the others. */
-static void lm_drop_unseen(rp_vo_stereo_t *vo)
-{
-    uint32_t i = 0;
-    while (i < LM_CAP) {
-        rp_landmark_t *l = &vo->lm[i];
-        if (l->id != RP_VO_EMPTY_ID && !l->seen) {
-            lm_remove_slot(vo, i);
-            continue; /* slot i now holds a shifted entry (or is empty): look again */
-        }
-        ++i;
-    }
-    for (i = 0; i < LM_CAP; ++i) {
-        vo->lm[i].seen = 0;
-    }
+    (void)rp_idmap_mark(&vo->map, (uint16_t)(l - vo->lm));
 }
 
 /* ---- set-up ------------------------------------------------------------------------------ */
@@ -168,7 +94,7 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
     if (st != RP_OK) {
         return st;
     }
-    lm_clear(vo);
+    (void)rp_idmap_clear(&vo->map);
     return RP_OK;
 }
 
@@ -181,7 +107,7 @@ static void match_map_build(rp_vo_stereo_t *vo, const rp_frameset_t *fs, uint8_t
     }
     for (uint16_t f = 0; f < fs->n[cam]; ++f) {
         uint32_t id = fs->f[cam][f].id;
-        uint32_t i = hash_id(id) & (MATCH_CAP - 1);
+        uint32_t i = rp_idmap_hash(id) & (MATCH_CAP - 1);
         while (vo->match_key[i] != RP_VO_EMPTY_ID && vo->match_key[i] != id) {
             i = (i + 1) & (MATCH_CAP - 1);
         }
@@ -192,7 +118,7 @@ static void match_map_build(rp_vo_stereo_t *vo, const rp_frameset_t *fs, uint8_t
 
 static int match_map_find(const rp_vo_stereo_t *vo, uint32_t id, uint16_t *idx)
 {
-    uint32_t i = hash_id(id) & (MATCH_CAP - 1);
+    uint32_t i = rp_idmap_hash(id) & (MATCH_CAP - 1);
     while (vo->match_key[i] != RP_VO_EMPTY_ID) {
         if (vo->match_key[i] == id) {
             *idx = vo->match_idx[i];
@@ -279,7 +205,7 @@ static int cam_in_layout(const rp_vo_stereo_t *vo, uint8_t cam)
     return 0;
 }
 
-/* Gather the observations of held landmarks in fs into vo->obs; marks them seen. */
+/* Gather the observations of held landmarks in fs into vo->obs. */
 static uint32_t gather_obs(rp_vo_stereo_t *vo, const rp_frameset_t *fs)
 {
     uint32_t n = 0;
@@ -322,7 +248,7 @@ static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uin
         }
     }
     est->flags = flags;
-    est->n_landmarks = vo->n_lm;
+    est->n_landmarks = vo->map.n;
 }
 
 static rp_status_t validate_frameset(const rp_vo_stereo_t *vo, const rp_frameset_t *fs)
@@ -344,14 +270,12 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
 {
     /* Step (1) at frame 0: the world is cam1's frame now, so the pose is exactly zero. */
     static const rp_real zero[6] = {0};
-    lm_clear(vo);
+    (void)rp_idmap_clear(&vo->map);
     uint16_t added = 0;
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
         added = (uint16_t)(added + triangulate_pair(vo, k, fs, zero, NULL));
     }
-    for (uint32_t i = 0; i < LM_CAP; ++i) {
-        vo->lm[i].seen = 0;
-    }
+    (void)rp_idmap_clear_marks(&vo->map);
     rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
     for (int i = 0; i < 6; ++i) {
         P0[i] = RP_C(1e-12); /* the pose at frame 0 is the origin by definition */
@@ -456,16 +380,15 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     /* Which landmarks are still tracked; lost ones are dropped. */
     uint32_t n = gather_obs(vo, fs);
     for (uint32_t i = 0; i < n; ++i) {
-        rp_landmark_t *l = lm_find(vo, vo->obs_id[i]);
-        l->seen = 1;
+        lm_mark_seen(vo, lm_find(vo, vo->obs_id[i]));
     }
-    lm_drop_unseen(vo);
+    (void)rp_idmap_drop_unmarked(&vo->map, RP_IDMAP_ALL_GROUPS, NULL);
 
     /* Step (5): a pair under its threshold is re-initialised from the previous frame set at
      * the previous pose (backtracking one frame), with matches still tracked now. */
     int reinit = 0;
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-        if (vo->n_lm_pair[k] < vo->cfg.min_tracked) {
+        if (vo->map.n_group[k] < vo->cfg.min_tracked) {
             (void)triangulate_pair(vo, k, &vo->prev, vo->prev_p, fs);
             reinit = 1;
         }
@@ -475,7 +398,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         n = gather_obs(vo, fs);
     }
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-        if (vo->n_lm_pair[k] < vo->cfg.min_tracked) {
+        if (vo->map.n_group[k] < vo->cfg.min_tracked) {
             flags |= RP_EST_DEGRADED;
         }
     }
@@ -508,7 +431,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
             if (vo->used[i]) {
                 est->n_used[vo->obs[i].cam]++;
                 if (l) {
-                    l->seen = 1;
+                    lm_mark_seen(vo, l);
                 }
             }
         }
@@ -517,11 +440,9 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         }
         if (n_gated > 0) {
             flags |= RP_EST_GATED;
-            lm_drop_unseen(vo);
+            (void)rp_idmap_drop_unmarked(&vo->map, RP_IDMAP_ALL_GROUPS, NULL);
         } else {
-            for (uint32_t i = 0; i < LM_CAP; ++i) {
-                vo->lm[i].seen = 0;
-            }
+            (void)rp_idmap_clear_marks(&vo->map);
         }
     } else {
         flags |= RP_EST_LOST;

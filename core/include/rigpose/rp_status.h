@@ -22,6 +22,7 @@ typedef enum {
     RP_E_RANGE,       /* a value outside its accepted range (e.g. triangulated depth) */
     RP_E_OUTSIDE,     /* a point projects outside the image */
     RP_E_DEGENERATE,  /* geometry that does not determine the answer (e.g. zero baseline) */
+    RP_E_NOT_FOUND,   /* a looked-up key (e.g. a feature id) is not held */
     RP_E_COUNT_       /* number of codes; not a status */
 } rp_status_t;
 

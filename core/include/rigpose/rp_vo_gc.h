@@ -43,6 +43,7 @@
 
 #include "rp_ekf.h"
 #include "rp_frame.h"
+#include "rp_idmap.h"
 #include "rp_obs.h"
 #include "rp_rig.h"
 #include "rp_struct.h"
@@ -88,25 +89,21 @@ typedef struct {
 rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void);
 
 typedef struct {
-    uint32_t id;     /* feature id; RP_VO_GC_EMPTY_ID marks a free slot */
     uint8_t cam;     /* camera that sees it */
-    uint8_t seen;    /* scratch: observed in the current frame */
     uint8_t mature;  /* depth converged (enters the pose update) */
-    uint8_t pad_;
     rp_point3_t pt;  /* world position (m) and its covariance */
 } rp_gc_landmark_t;
 
-#define RP_VO_GC_EMPTY_ID 0xFFFFFFFFu
+#define RP_VO_GC_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
 #define RP_VO_GC_MAX_OBS (RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM)
 
 typedef struct {
     const rp_rig_t *rig;
     rp_vo_gc_cfg_t cfg;
     rp_ekf_t ekf;
-    rp_gc_landmark_t lm[RP_MAX_LANDMARKS]; /* hash table keyed by id: linear probing with
-                                            * backward-shift deletion, at most 3/4 full */
-    uint16_t n_lm;                         /* landmarks held */
-    uint16_t n_lm_cam[RP_MAX_CAMS];        /* landmarks held per rig camera */
+    rp_idmap_t map;                        /* feature id -> slot in lm; group = the camera
+                                            * that sees it; mark = observed this frame */
+    rp_gc_landmark_t lm[RP_IDMAP_MAX_SLOTS]; /* landmark records, by slot */
     uint32_t frame;                        /* frames processed */
     int64_t prev_utime;
     rp_obs_t obs[RP_VO_GC_MAX_OBS];        /* scratch: this frame's observations */

@@ -27,6 +27,7 @@
 
 #include "rp_ekf.h"
 #include "rp_frame.h"
+#include "rp_idmap.h"
 #include "rp_obs.h"
 #include "rp_rig.h"
 #include "rp_struct.h"
@@ -49,20 +50,18 @@ typedef struct {
 rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void);
 
 typedef struct {
-    uint32_t id;    /* feature id; RP_VO_MONO_EMPTY_ID marks a free slot */
-    uint8_t seen;   /* scratch */
     rp_point3_t pt; /* position in world_k (m) and its covariance */
 } rp_mono_landmark_t;
 
-#define RP_VO_MONO_EMPTY_ID 0xFFFFFFFFu
+#define RP_VO_MONO_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
 
 typedef struct {
     const rp_rig_t *rig;               /* the full rig (extrinsics of cam) */
     rp_rig_t own;                      /* one camera at R = I, D = 0 */
     rp_vo_mono_cfg_t cfg;
     rp_ekf_t ekf;                      /* camera's own pose in world_k */
-    rp_mono_landmark_t lm[RP_MAX_LANDMARKS]; /* hash table keyed by id */
-    uint16_t n_lm;
+    rp_idmap_t map;                    /* feature id -> slot in lm; mark = observed now */
+    rp_mono_landmark_t lm[RP_IDMAP_MAX_SLOTS]; /* landmark records, by slot */
     uint16_t n_prev;                   /* previous frame's features of cam, for backtracking */
     rp_feat_t prev[RP_MAX_FEATS_PER_CAM];
     rp_real prev_p[6];                 /* own pose at the previous frame */

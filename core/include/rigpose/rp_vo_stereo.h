@@ -20,6 +20,7 @@
 
 #include "rp_ekf.h"
 #include "rp_frame.h"
+#include "rp_idmap.h"
 #include "rp_lowe.h"
 #include "rp_obs.h"
 #include "rp_rig.h"
@@ -51,23 +52,20 @@ typedef struct {
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
 
 typedef struct {
-    uint32_t id;    /* feature id; RP_VO_EMPTY_ID marks a free slot */
-    uint8_t pair;   /* pair that triangulated it */
-    uint8_t seen;   /* scratch: observed (and not gated) in the current frame */
     rp_point3_t pt; /* world position (m) and its covariance */
 } rp_landmark_t;
 
-#define RP_VO_EMPTY_ID 0xFFFFFFFFu
+#define RP_VO_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
 
 typedef struct {
     const rp_rig_t *rig;
     rp_vo_stereo_cfg_t cfg;
     rp_stereo_pair_t pair[RP_MAX_PAIRS];
     rp_ekf_t ekf;
-    rp_landmark_t lm[RP_MAX_LANDMARKS]; /* hash table keyed by id: linear probing with
-                                         * backward-shift deletion, at most 3/4 full */
-    uint16_t n_lm;                      /* landmarks held */
-    uint16_t n_lm_pair[RP_MAX_PAIRS];   /* landmarks held per pair */
+    rp_idmap_t map;                     /* feature id -> slot in lm; group = the pair that
+                                         * triangulated it; mark = observed (and not gated)
+                                         * in the current frame */
+    rp_landmark_t lm[RP_IDMAP_MAX_SLOTS]; /* landmark records, by slot */
     rp_frameset_t prev;                 /* previous frame set, for backtracking */
     rp_real prev_p[6];                  /* pose estimate at the previous frame */
     uint32_t frame;                     /* frames processed */
