@@ -707,5 +707,27 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
     }
 }
 
+rp_hal_status_t rp_hal_v4l2_describe(uint8_t cam, char *buf, size_t cap)
+{
+    const v4l2_src_t *s = &g_v4l2;
+    if (!s->open) {
+        return RP_HAL_E_STATE;
+    }
+    if (buf == NULL || cap == 0 || cam >= s->cfg.n_cams) {
+        return RP_HAL_E_ARG;
+    }
+    const v4l2_cam_t *c = &s->cam[cam];
+    char fs[5];
+    fourcc_str(c->fourcc, fs);
+    if (c->gone) {
+        (void)snprintf(buf, cap, "%s: gone, retried every %u ms", c->cfg->device,
+                       (unsigned)s->cfg.retry_ms);
+    } else {
+        (void)snprintf(buf, cap, "%s: %s %ux%u, %u bytes/line, %u mmap buffers", c->cfg->device,
+                       fs, (unsigned)c->w, (unsigned)c->h, (unsigned)c->bpl, (unsigned)c->nbuf);
+    }
+    return RP_HAL_OK;
+}
+
 const rp_hal_ops_t rp_hal_v4l2_ops = {"v4l2", v4l2_open, v4l2_start, v4l2_grab, v4l2_stop,
                                       v4l2_close};

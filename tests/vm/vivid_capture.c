@@ -14,7 +14,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/resource.h>
+
 #include "rigpose/rp_hal.h"
+#include "rigpose/rp_hal_v4l2.h"
 
 static int fail(const char *what, unsigned set)
 {
@@ -68,6 +71,12 @@ int main(int argc, char **argv)
     }
     printf("cameras=%u size=%ux%u fps=%u tol_ms=%u sets=%u\n", (unsigned)n, w, h, fps, tol_ms,
            n_sets);
+    for (uint8_t i = 0; i < n; i++) {
+        char d[160];
+        if (rp_hal_v4l2_describe(i, d, sizeof d) == RP_HAL_OK) {
+            printf("%s\n", d);
+        }
+    }
     int64_t last_set = 0, last_cam[RP_MAX_CAMS] = {0}, first_set = 0;
     int64_t worst_spread = 0, worst_age = 0, most_ahead = 0;
     unsigned timeouts = 0, got = 0, dropped_sets = 0;
@@ -150,6 +159,12 @@ int main(int argc, char **argv)
         }
         last_set = set.utime;
         got++;
+    }
+    struct rusage ru;
+    if (got > 0 && getrusage(RUSAGE_SELF, &ru) == 0) {
+        const double cpu = (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+                           (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
+        printf("cpu_ms_per_set=%.2f\n", cpu * 1000.0 / got);
     }
     if (got > 1) {
         printf("set_rate_hz=%.2f\n", (double)(got - 1) * 1e6 / (double)(last_set - first_set));

@@ -51,6 +51,11 @@ uint32_t rp_hal_seq_update(rp_hal_seq_t *s, uint32_t seq);
 uint8_t rp_hal_group(const int64_t t_us[], const uint8_t have[], uint8_t n, int64_t tol_us,
                      uint8_t in[], int64_t *anchor_us);
 
+/* What the open v4l2 source negotiated for camera cam, in words for logs, e.g.
+ * "/dev/video0: GREY 640x480, 640 bytes/line, 4 mmap buffers"; RP_HAL_E_STATE if no v4l2
+ * source is open, RP_HAL_E_ARG for a bad camera or buffer. */
+rp_hal_status_t rp_hal_v4l2_describe(uint8_t cam, char *buf, size_t cap);
+
 #ifdef __cplusplus
 }
 #endif
