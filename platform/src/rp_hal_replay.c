@@ -2,9 +2,10 @@
  * rp_hal_replay.c - the HAL's replay source: recorded or rendered frame sets from a folder.
  *
  * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/realdata):
- *   frames.csv  header `utime_us,cam0,cam1,...` (one image column per configured camera, any
- *               names), then one row per frame set: the capture time in microseconds (strictly
- *               increasing) and each camera's image, a path relative to the folder (or absolute).
+ *   frames.csv  header `utime_us,cam0,cam1,...`, then one row per frame set: the capture time in
+ *               microseconds (strictly increasing) and each column's image, a path relative to
+ *               the folder (or absolute). Camera i reads the column named cfg.cam[i].device, or
+ *               with an empty device the i-th image column.
  *               Blank lines and lines starting with '#' are skipped.
  *   truth.csv   optional, header `utime_us,tx,ty,tz,alpha,beta,gamma`: the pose of cam1 in the
  *               world (as rp_estimate_t.p); a set gets the row with its exact utime, if any.
@@ -47,6 +48,8 @@ typedef struct {
     rp_real truth_p[6];
     char buf[LINE_MAX_CHARS];
     char path[2 * RP_HAL_PATH_MAX];
+    uint8_t n_cols;              /* image columns in frames.csv */
+    uint8_t col[RP_MAX_CAMS];    /* camera i's image column */
     uint16_t w[RP_MAX_CAMS], h[RP_MAX_CAMS];
     uint8_t grey[RP_MAX_CAMS][(size_t)RP_HAL_MAX_W * RP_HAL_MAX_H];
 } replay_src_t;
@@ -295,10 +298,34 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
                            "%s:%u: header must be utime_us,cam0,cam1,...", csv,
                            (unsigned)s->line);
     }
-    if (k - 1 != cfg->n_cams) {
+    if (k > RP_MAX_CAMS + 1) {
         replay_close(s);
-        return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: %u image columns, configured %u cameras",
-                           csv, (unsigned)s->line, k - 1, (unsigned)cfg->n_cams);
+        return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: more than %d image columns", csv,
+                           (unsigned)s->line, RP_MAX_CAMS);
+    }
+    s->n_cols = (uint8_t)(k - 1);
+    for (uint8_t i = 0; i < cfg->n_cams; i++) {
+        const char *name = cfg->cam[i].device;
+        if (memchr(name, '\0', RP_HAL_PATH_MAX) == NULL) {
+            replay_close(s);
+            return rp_hal_fail(err, RP_HAL_E_ARG, "replay: camera %u: device not terminated",
+                               (unsigned)i);
+        }
+        unsigned c = name[0] == '\0' ? i : RP_MAX_CAMS;
+        for (unsigned j = 0; j < s->n_cols && name[0] != '\0'; j++) {
+            c = strcmp(f[j + 1], name) == 0 ? j : c;
+        }
+        if (c >= s->n_cols) {
+            replay_close(s);
+            if (name[0] == '\0') {
+                return rp_hal_fail(err, RP_HAL_E_FORMAT,
+                                   "%s:%u: %u image columns, configured %u cameras", csv,
+                                   (unsigned)s->line, (unsigned)s->n_cols, (unsigned)cfg->n_cams);
+            }
+            return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: no column '%s' (camera %u)", csv,
+                               (unsigned)s->line, name, (unsigned)i);
+        }
+        s->col[i] = (uint8_t)c;
     }
     (void)snprintf(csv, sizeof csv, "%s/truth.csv", s->dir);
     s->truth = fopen(csv, "r");
@@ -384,10 +411,10 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
     char *f[RP_MAX_CAMS + 2];
     const unsigned k = r > 0 ? split(s->buf, f, RP_MAX_CAMS + 1) : 0;
     int64_t u = 0;
-    if (r < 0 || k != (unsigned)n + 1 || !parse_i64(f[0], &u)) {
+    if (r < 0 || k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
                            "%s/frames.csv:%u: want utime_us and %u image paths", s->dir,
-                           (unsigned)s->line, (unsigned)n);
+                           (unsigned)s->line, (unsigned)s->n_cols);
     }
     if (s->any_row && u <= s->last_u) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
@@ -398,7 +425,7 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
     s->last_u = u;
     const uint32_t row = s->row++;
     for (uint8_t i = 0; i < n; i++) {
-        const rp_hal_status_t st = load_image(s, i, f[i + 1]);
+        const rp_hal_status_t st = load_image(s, i, f[s->col[i] + 1]);
         if (st != RP_HAL_OK) {
             return st;
         }

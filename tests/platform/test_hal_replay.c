@@ -197,6 +197,13 @@ static void test_replay_malformed_csv(void **state)
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_FORMAT);
     assert_non_null(strstr(rp_hal_errmsg(NULL), "1 image columns, configured 2"));
 
+    rp_hal_cfg_t named = cfg;
+    snprintf(named.cam[1].device, sizeof named.cam[1].device, "left");
+    write_file("frames.csv", "utime_us,cam0,cam1\n10,x.pgm,x.pgm\n");
+    assert_int_equal(rp_hal_open(&src, &named), RP_HAL_E_FORMAT);
+    printf("unknown column: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "no column 'left'"));
+
     const char *bad_rows[3] = {"10,x.pgm\n", "1x0,x.pgm,x.pgm\n", "5,x.pgm,x.pgm,x.pgm\n"};
     for (int k = 0; k < 3; k++) {
         char text[128];
@@ -250,6 +257,28 @@ static void test_replay_malformed_images(void **state)
         printf("bad image %d: %s\n", k, rp_hal_errmsg(src));
     }
     assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    rp_hal_close(src);
+}
+
+/* Given cameras naming their columns, each reads its own column whatever the order; columns no
+ * camera names are skipped. */
+static void test_replay_named_columns(void **state)
+{
+    (void)state;
+    write_pgm("l.pgm", 1, W, H);
+    write_pgm("r.pgm", 2, W, H);
+    write_pgm("d.pgm", 3, W, H);
+    write_file("frames.csv", "utime_us,depth,right,left\n5,d.pgm,r.pgm,l.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    snprintf(cfg.cam[0].device, sizeof cfg.cam[0].device, "left");
+    snprintf(cfg.cam[1].device, sizeof cfg.cam[1].device, "right");
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    check_image(&set.cam[0], 1);
+    check_image(&set.cam[1], 2);
     rp_hal_close(src);
 }
 
@@ -316,6 +345,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_replay_missing_image, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_malformed_csv, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_malformed_images, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_named_columns, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_realtime, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_hal_dispatch, setup_dir, remove_dir),
     };

@@ -54,7 +54,8 @@ typedef enum { RP_HAL_SRC_V4L2 = 0, RP_HAL_SRC_REPLAY, RP_HAL_SRC_SIM } rp_hal_k
 
 /* One camera of the source. */
 typedef struct {
-    char device[RP_HAL_PATH_MAX]; /* v4l2: /dev/videoN; replay: unused (frames.csv has paths) */
+    char device[RP_HAL_PATH_MAX]; /* v4l2: /dev/videoN; replay: its column in frames.csv ("" =
+                                   * the i-th image column); sim: unused */
     uint16_t w, h;                /* wanted size, px; 0 = any. v4l2 asks for it and refuses a
                                    * different one; replay checks every image against it */
     uint16_t fps;                 /* wanted rate (v4l2) */
