@@ -4,38 +4,20 @@
  * row, consistency of the pose covariance (3-sigma fraction, NEES), top-up of features, cameras
  * going dark, malformed frame sets and bad configuration.
  */
-#include <stdlib.h>
 #include <string.h>
 
-#include "rp_test.h"
 #include "rigpose/rp_linalg.h"
-#include "rigpose/rp_rot.h"
 #include "rigpose/rp_vo_gc.h"
-#include "rp_sim.h"
+#include "sim_fixture.h"
 
 typedef struct {
-    rp_sim_run_t sr;
-    rp_frameset_t fs;
+    simfx_t sim; /* first: the run, frame set and estimate */
     rp_vo_gc_t vo;
-    rp_estimate_t est;
 } fixture_t;
 
 static fixture_t *fixture(double noise_px, uint32_t frames, uint32_t run)
 {
-    fixture_t *fx = calloc(1, sizeof(*fx));
-    assert_non_null(fx);
-    rp_sim_cfg_t cfg;
-    rp_sim_default_cfg(&cfg);
-    cfg.noise_px = noise_px;
-    cfg.n_frames = frames;
-    assert_int_equal(rp_sim_run_init(&fx->sr, &cfg, 11, run), 0);
-    return fx;
-}
-
-static void fixture_free(fixture_t *fx)
-{
-    rp_sim_run_free(&fx->sr);
-    free(fx);
+    return simfx_new(sizeof(fixture_t), noise_px, frames, run);
 }
 
 /* The simulator's configuration of gc: cam1..cam4, the shell's mid depth. */
@@ -53,8 +35,6 @@ static rp_vo_gc_cfg_t gc_cfg(double noise_px)
     c.ekf.sigma_px = noise_px > 0 ? (rp_real)noise_px : RP_C(0.01);
     return c;
 }
-
-typedef void (*mutate_fn)(rp_frameset_t *fs, uint32_t j);
 
 typedef struct {
     double err[6];      /* mean absolute error over frames 1.., m and rad */
@@ -82,43 +62,42 @@ static double nees6(const double e[6], const rp_real cov[36])
     return s;
 }
 
-static void run_sequence(fixture_t *fx, const rp_vo_gc_cfg_t *cfg, uint32_t frames,
-                         mutate_fn mutate, outcome_t *out)
+static rp_status_t gc_step(void *vo, const rp_frameset_t *fs, rp_estimate_t *est)
 {
-    assert_ok(rp_vo_gc_init(&fx->vo, &fx->sr.rig, cfg));
-    memset(out, 0, sizeof(*out));
-    for (uint32_t j = 0; j < frames; ++j) {
-        rp_sim_frame(&fx->sr, j, &fx->fs);
-        if (mutate) mutate(&fx->fs, j);
-        rp_status_t st = rp_vo_gc_step(&fx->vo, &fx->fs, &fx->est);
-        if (st != RP_OK) out->lost++;
-        out->flags_or |= fx->est.flags;
-        for (int i = 0; i < 6; ++i) assert_true(isfinite((double)fx->est.p[i]));
-        if (j == 0) {
-            assert_true(fx->est.flags & RP_EST_INITIALISING);
-            continue;
+    return rp_vo_gc_step(vo, fs, est);
+}
+
+/* Per scored frame: the covariance's 3-sigma bounds and the NEES. */
+static void score_covariance(void *ctx, const rp_estimate_t *est, const double e[6])
+{
+    outcome_t *out = ctx;
+    int all_in = 1;
+    for (int i = 0; i < 6; ++i) {
+        const double sd = sqrt((double)est->cov[i * 6 + i]);
+        if (fabs(e[i]) <= 3.0 * sd) {
+            out->in3_col[i]++;
+        } else {
+            all_in = 0;
         }
-        double e[6];
-        int all_in = 1;
-        for (int i = 0; i < 6; ++i) {
-            double d = (double)fx->est.p[i] - fx->sr.truth[j * 6 + i];
-            if (i >= 3) d = (double)rp_angle_wrap((rp_real)d);
-            e[i] = d;
-            out->err[i] += fabs(d) / (double)(frames - 1);
-            const double sd = sqrt((double)fx->est.cov[i * 6 + i]);
-            if (fabs(d) <= 3.0 * sd) {
-                out->in3_col[i]++;
-            } else {
-                all_in = 0;
-            }
-        }
-        out->in3 += (uint32_t)all_in;
-        double q = nees6(e, fx->est.cov);
-        assert_true(q >= 0.0);
-        out->nees_sum += q;
-        out->nees_in += q <= 20.06; /* chi-square, 6 dof, 99.73 % (the 3-sigma mass) */
-        out->scored++;
     }
+    out->in3 += (uint32_t)all_in;
+    double q = nees6(e, est->cov);
+    assert_true(q >= 0.0);
+    out->nees_sum += q;
+    out->nees_in += q <= 20.06; /* chi-square, 6 dof, 99.73 % (the 3-sigma mass) */
+    out->scored++;
+}
+
+static void run_sequence(fixture_t *fx, const rp_vo_gc_cfg_t *cfg, uint32_t frames,
+                         simfx_mutate_fn mutate, outcome_t *out)
+{
+    assert_ok(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, cfg));
+    memset(out, 0, sizeof(*out));
+    simfx_score_t sc;
+    simfx_run(&fx->sim, gc_step, &fx->vo, frames, mutate, score_covariance, out, &sc);
+    memcpy(out->err, sc.err, sizeof(sc.err));
+    out->lost = sc.lost;
+    out->flags_or = sc.flags_or;
 }
 
 static void test_noise_free_run_follows_truth(void **state)
@@ -130,14 +109,13 @@ static void test_noise_free_run_follows_truth(void **state)
     rp_vo_gc_cfg_t cfg = gc_cfg(0.0);
     outcome_t o;
     run_sequence(fx, &cfg, 40, NULL, &o);
-    print_message("gc noise-free: tx %.2e ty %.2e tz %.2e a %.2e b %.2e g %.2e\n", o.err[0],
-                  o.err[1], o.err[2], o.err[3], o.err[4], o.err[5]);
+    simfx_print_err("gc noise-free", o.err);
     assert_int_equal(o.lost, 0);
     for (int i = 0; i < 3; ++i) assert_true(o.err[i] < 3e-3);
     /* (float: a 0.01 px filter sigma is near the scalar's resolution) */
     for (int i = 3; i < 6; ++i) assert_true(o.err[i] < RP_TOL(1e-3, 3e-3));
-    assert_true(fx->est.flags & RP_EST_TRACKING);
-    fixture_free(fx);
+    assert_true(fx->sim.est.flags & RP_EST_TRACKING);
+    simfx_free(fx);
 }
 
 static void test_noisy_runs_beat_the_papers_stereo_pair(void **state)
@@ -154,10 +132,9 @@ static void test_noisy_runs_beat_the_papers_stereo_pair(void **state)
         run_sequence(fx, &cfg, 100, NULL, &o);
         assert_int_equal(o.lost, 0);
         for (int i = 0; i < 6; ++i) mean[i] += o.err[i] / runs;
-        fixture_free(fx);
+        simfx_free(fx);
     }
-    print_message("gc over %d runs: tx %.2e ty %.2e tz %.2e a %.2e b %.2e g %.2e\n", runs,
-                  mean[0], mean[1], mean[2], mean[3], mean[4], mean[5]);
+    simfx_print_err("gc over 4 runs", mean);
     for (int i = 0; i < 6; ++i) assert_true(mean[i] <= paper2[i]);
 }
 
@@ -179,7 +156,7 @@ static void test_pose_covariance_is_consistent(void **state)
         nees += o.nees_sum;
         nees_in += o.nees_in;
         for (int i = 0; i < 6; ++i) in3_col[i] += o.in3_col[i];
-        fixture_free(fx);
+        simfx_free(fx);
     }
     const double frac = (double)in3 / scored;
     print_message("gc consistency: all six within 3 sigma in %.1f%% of %u frames; per column "
@@ -205,7 +182,7 @@ static void test_top_up_adds_features_and_keeps_accuracy(void **state)
     assert_int_equal(o.lost, 0);
     assert_true(o.flags_or & RP_EST_REINIT);
     for (int i = 0; i < 3; ++i) assert_true(o.err[i] < 1e-2);
-    fixture_free(fx);
+    simfx_free(fx);
 }
 
 /* The right camera delivers nothing from frame 20 to 29. */
@@ -226,13 +203,8 @@ static void test_one_camera_dark_keeps_tracking_with_the_others(void **state)
     for (int i = 0; i < 3; ++i) assert_true(o.err[i] < 1e-2);
     for (int i = 3; i < 6; ++i) assert_true(o.err[i] < 5e-3);
     /* the camera's landmarks survived the gap: it is used again */
-    assert_true(fx->est.n_used[RP_SIM_CAM2] > 0);
-    fixture_free(fx);
-}
-
-static void all_dark(rp_frameset_t *fs, uint32_t j)
-{
-    if (j >= 10 && j <= 12) memset(fs->n, 0, sizeof(fs->n));
+    assert_true(fx->sim.est.n_used[RP_SIM_CAM2] > 0);
+    simfx_free(fx);
 }
 
 static void test_all_cameras_dark_reports_lost_then_recovers(void **state)
@@ -241,23 +213,12 @@ static void test_all_cameras_dark_reports_lost_then_recovers(void **state)
     fixture_t *fx = fixture(0.5, 40, 3);
     rp_vo_gc_cfg_t cfg = gc_cfg(0.5);
     outcome_t o;
-    run_sequence(fx, &cfg, 40, all_dark, &o);
+    run_sequence(fx, &cfg, 40, simfx_all_dark_10_12, &o);
     assert_int_equal(o.lost, 3);
     assert_true(o.flags_or & RP_EST_LOST);
-    for (int i = 0; i < 3; ++i) {
-        assert_true(fabs((double)fx->est.p[i] - fx->sr.truth[39 * 6 + i]) < 0.1);
-    }
-    assert_true(fx->est.flags & RP_EST_TRACKING);
-    fixture_free(fx);
-}
-
-static void nan_pixels(rp_frameset_t *fs, uint32_t j)
-{
-    if (j % 3 == 1) {
-        for (uint16_t i = 0; i < fs->n[RP_SIM_CAM1] && i < 5; ++i) {
-            fs->f[RP_SIM_CAM1][i].uv[0] = (rp_real)NAN;
-        }
-    }
+    simfx_assert_last_position_near(&fx->sim, 39, 0.1);
+    assert_true(fx->sim.est.flags & RP_EST_TRACKING);
+    simfx_free(fx);
 }
 
 static void test_nan_pixels_are_skipped(void **state)
@@ -266,10 +227,10 @@ static void test_nan_pixels_are_skipped(void **state)
     fixture_t *fx = fixture(0.5, 20, 4);
     rp_vo_gc_cfg_t cfg = gc_cfg(0.5);
     outcome_t o;
-    run_sequence(fx, &cfg, 20, nan_pixels, &o);
+    run_sequence(fx, &cfg, 20, simfx_nan_pixels_cam1, &o);
     assert_int_equal(o.lost, 0);
     for (int i = 0; i < 3; ++i) assert_true(o.err[i] < 1e-2);
-    fixture_free(fx);
+    simfx_free(fx);
 }
 
 static void test_malformed_frameset_is_rejected_without_damage(void **state)
@@ -277,20 +238,11 @@ static void test_malformed_frameset_is_rejected_without_damage(void **state)
     (void)state;
     fixture_t *fx = fixture(0.5, 10, 5);
     rp_vo_gc_cfg_t cfg = gc_cfg(0.5);
-    assert_ok(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg));
-    rp_sim_frame(&fx->sr, 0, &fx->fs);
-    assert_ok(rp_vo_gc_step(&fx->vo, &fx->fs, &fx->est));
-    assert_true(fx->est.n_landmarks > 200);
-    rp_sim_frame(&fx->sr, 1, &fx->fs);
-    fx->fs.n[2] = RP_MAX_FEATS_PER_CAM + 1;
-    assert_status(rp_vo_gc_step(&fx->vo, &fx->fs, &fx->est), RP_E_ARG);
-    assert_true(fx->est.flags & RP_EST_LOST);
-    assert_status(rp_vo_gc_step(&fx->vo, NULL, &fx->est), RP_E_ARG);
-    assert_status(rp_vo_gc_step(NULL, &fx->fs, &fx->est), RP_E_ARG);
-    rp_sim_frame(&fx->sr, 1, &fx->fs);
-    assert_ok(rp_vo_gc_step(&fx->vo, &fx->fs, &fx->est));
-    assert_true(fx->est.flags & RP_EST_TRACKING);
-    fixture_free(fx);
+    assert_ok(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg));
+    simfx_check_malformed(&fx->sim, gc_step, &fx->vo, 2);
+    assert_true(fx->sim.est.n_landmarks > 200);
+    assert_status(rp_vo_gc_step(NULL, &fx->sim.fs, &fx->sim.est), RP_E_ARG);
+    simfx_free(fx);
 }
 
 static void test_bad_configuration_is_refused(void **state)
@@ -298,35 +250,35 @@ static void test_bad_configuration_is_refused(void **state)
     (void)state;
     fixture_t *fx = fixture(0.5, 2, 0);
     rp_vo_gc_cfg_t cfg = gc_cfg(0.5);
-    assert_status(rp_vo_gc_init(NULL, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(NULL, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     assert_status(rp_vo_gc_init(&fx->vo, NULL, &cfg), RP_E_ARG);
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, NULL), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, NULL), RP_E_ARG);
     cfg.n_cams = 0;
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.cams[3] = RP_SIM_CAM1; /* a camera twice */
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.cams[1] = 9; /* no such camera */
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.init_depth_m = 0;
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.init_depth_sigma_m = (rp_real)NAN;
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.min_tracked = 3;
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.mature_frac = -1;
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.ekf.sigma_px = -1;
-    assert_status(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
-    assert_ok(rp_vo_gc_init(&fx->vo, &fx->sr.rig, &cfg));
-    fixture_free(fx);
+    assert_ok(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg));
+    simfx_free(fx);
 }
 
 int main(void)

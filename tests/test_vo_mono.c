@@ -4,38 +4,22 @@
  * the paper's rows, re-initialisation, a camera that goes dark, the mapping to the rig frame,
  * malformed input and bad configuration.
  */
-#include <stdlib.h>
 #include <string.h>
 
-#include "rp_test.h"
-#include "rigpose/rp_rot.h"
 #include "rigpose/rp_vo_mono.h"
-#include "rp_sim.h"
+#include "sim_fixture.h"
 
 #define MID_DEPTH ((0.667 + 1.0) / 2.0)
 
 typedef struct {
-    rp_sim_run_t sr;
-    rp_frameset_t fs;
+    simfx_t sim; /* first: the run, frame set and estimate (rig frame) */
     rp_vo_mono_t vo;
-    rp_estimate_t est, own;
+    rp_estimate_t own; /* the camera's own pose */
 } fixture_t;
 
 static fixture_t *fixture(double noise_px, uint32_t frames, uint32_t run)
 {
-    fixture_t *fx = calloc(1, sizeof(*fx));
-    rp_sim_cfg_t cfg;
-    rp_sim_default_cfg(&cfg);
-    cfg.noise_px = noise_px;
-    cfg.n_frames = frames;
-    assert_int_equal(rp_sim_run_init(&fx->sr, &cfg, 11, run), 0);
-    return fx;
-}
-
-static void fixture_free(fixture_t *fx)
-{
-    rp_sim_run_free(&fx->sr);
-    free(fx);
+    return simfx_new(sizeof(fixture_t), noise_px, frames, run);
 }
 
 static rp_vo_mono_cfg_t mono_cfg(uint8_t cam, double noise_px)
@@ -48,34 +32,23 @@ static rp_vo_mono_cfg_t mono_cfg(uint8_t cam, double noise_px)
     return c;
 }
 
-typedef void (*mutate_fn)(rp_frameset_t *fs, uint32_t j);
-
-/* Mean absolute error over frames 1.. of the rig pose (est), into err[6]. Returns lost frames. */
-static uint32_t run_sequence(fixture_t *fx, const rp_vo_mono_cfg_t *cfg, uint32_t frames,
-                             mutate_fn mutate, double err[6], uint32_t *flags_or)
+/* Step of the fixture's estimator (p: the fixture), reporting the rig pose. */
+static rp_status_t mono_step(void *p, const rp_frameset_t *fs, rp_estimate_t *est)
 {
-    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sr.rig, cfg));
-    memset(err, 0, 6 * sizeof(double));
-    uint32_t lost = 0;
-    *flags_or = 0;
-    for (uint32_t j = 0; j < frames; ++j) {
-        rp_sim_frame(&fx->sr, j, &fx->fs);
-        if (mutate) mutate(&fx->fs, j);
-        rp_status_t st = rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, &fx->own);
-        if (st != RP_OK) lost++;
-        *flags_or |= fx->est.flags;
-        for (int i = 0; i < 6; ++i) assert_true(isfinite((double)fx->est.p[i]));
-        if (j == 0) {
-            assert_true(fx->est.flags & RP_EST_INITIALISING);
-            continue;
-        }
-        for (int i = 0; i < 6; ++i) {
-            double d = (double)fx->est.p[i] - fx->sr.truth[j * 6 + i];
-            if (i >= 3) d = (double)rp_angle_wrap((rp_real)d);
-            err[i] += fabs(d) / (double)(frames - 1);
-        }
-    }
-    return lost;
+    fixture_t *fx = p;
+    return rp_vo_mono_step(&fx->vo, fs, est, &fx->own);
+}
+
+/* Mean absolute error of the rig pose over frames 1.. into err[6]; returns the frames lost. */
+static uint32_t run_sequence(fixture_t *fx, const rp_vo_mono_cfg_t *cfg, uint32_t frames,
+                             simfx_mutate_fn mutate, double err[6], uint32_t *flags_or)
+{
+    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, cfg));
+    simfx_score_t sc;
+    simfx_run(&fx->sim, mono_step, fx, frames, mutate, NULL, NULL, &sc);
+    memcpy(err, sc.err, sizeof(sc.err));
+    *flags_or = sc.flags_or;
+    return sc.lost;
 }
 
 /* Mean distance of cam1's landmarks (world = cam1's first frame) from the true points. */
@@ -105,22 +78,22 @@ static void test_structure_converges_within_a_run(void **state)
     (void)state;
     fixture_t *fx = fixture(0.5, 40, 0);
     rp_vo_mono_cfg_t cfg = mono_cfg(RP_SIM_CAM1, 0.5);
-    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg));
+    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg));
     double e0 = 0, e1 = 0;
     uint32_t n0 = 0, n1 = 0;
     for (uint32_t j = 0; j < 25; ++j) {
-        rp_sim_frame(&fx->sr, j, &fx->fs);
-        rp_status_t st = rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, NULL);
+        rp_sim_frame(&fx->sim.sr, j, &fx->sim.fs);
+        rp_status_t st = rp_vo_mono_step(&fx->vo, &fx->sim.fs, &fx->sim.est, NULL);
         assert_true(st == RP_OK);
-        if (j == 0) e0 = structure_error(&fx->vo, &fx->sr, &n0);
+        if (j == 0) e0 = structure_error(&fx->vo, &fx->sim.sr, &n0);
     }
-    e1 = structure_error(&fx->vo, &fx->sr, &n1);
+    e1 = structure_error(&fx->vo, &fx->sim.sr, &n1);
     print_message("structure error: %.4f m (%u points, orthographic) -> %.4f m (%u points)\n",
                   e0, n0, e1, n1);
     assert_true(n0 >= 50 && n1 >= 50);
     assert_true(e0 > 0.02);       /* the depth assumption is off by up to 0.17 m */
     assert_true(e1 < 0.6 * e0);   /* the structure EKFs pull it towards the truth */
-    fixture_free(fx);
+    simfx_free(fx);
 }
 
 static void test_noise_free_run_follows_truth_up_to_depth_scale(void **state)
@@ -132,15 +105,16 @@ static void test_noise_free_run_follows_truth_up_to_depth_scale(void **state)
         double err[6];
         uint32_t flags;
         assert_int_equal(run_sequence(fx, &cfg, 40, NULL, err, &flags), 0);
-        print_message("cam%u noise-free: tx %.2e ty %.2e tz %.2e a %.2e b %.2e g %.2e\n",
-                      cam + 1u, err[0], err[1], err[2], err[3], err[4], err[5]);
+        char label[32];
+        snprintf(label, sizeof(label), "cam%u noise-free", cam + 1u);
+        simfx_print_err(label, err);
         assert_true(flags & RP_EST_SCALE_WEAK);
         /* Without noise the errors are the depth assumption's alone: the translation is right
          * up to its scale (the error stays a tenth of the ~0.3 m travelled over 40 frames) and
          * the rotation is off only through the rotation/translation coupling of one camera
          * (largest for the sideways cameras). */
         for (int i = 0; i < 6; ++i) assert_true(err[i] < 0.03);
-        fixture_free(fx);
+        simfx_free(fx);
     }
 }
 
@@ -163,10 +137,11 @@ static void test_noisy_runs_beat_the_papers_single_camera_rows(void **state)
             uint32_t flags;
             assert_int_equal(run_sequence(fx, &cfg, 100, NULL, err, &flags), 0);
             for (int i = 0; i < 6; ++i) mean[i] += err[i] / runs;
-            fixture_free(fx);
+            simfx_free(fx);
         }
-        print_message("cam%u over %d runs: tx %.2e ty %.2e tz %.2e a %.2e b %.2e g %.2e\n",
-                      cam + 1u, runs, mean[0], mean[1], mean[2], mean[3], mean[4], mean[5]);
+        char label[32];
+        snprintf(label, sizeof(label), "cam%u over %d runs", cam + 1u, runs);
+        simfx_print_err(label, mean);
         for (int i = 0; i < 6; ++i) assert_true(mean[i] <= paper[cam][i]);
     }
 }
@@ -182,7 +157,7 @@ static void test_reinitialisation_backtracks_and_keeps_accuracy(void **state)
     assert_int_equal(run_sequence(fx, &cfg, 60, NULL, err, &flags), 0);
     assert_true(flags & RP_EST_REINIT);
     for (int i = 0; i < 6; ++i) assert_true(err[i] < 0.03);
-    fixture_free(fx);
+    simfx_free(fx);
 }
 
 /* Camera 3 delivers nothing for frames 10-12. */
@@ -202,11 +177,9 @@ static void test_dark_camera_reports_lost_then_recovers(void **state)
     assert_true(lost >= 3 && lost <= 5);
     assert_true(flags & RP_EST_LOST);
     assert_true(flags & RP_EST_REINIT);
-    assert_true(fx->est.flags & RP_EST_TRACKING);
-    for (int i = 0; i < 3; ++i) {
-        assert_true(fabs((double)fx->est.p[i] - fx->sr.truth[39 * 6 + i]) < 0.15);
-    }
-    fixture_free(fx);
+    assert_true(fx->sim.est.flags & RP_EST_TRACKING);
+    simfx_assert_last_position_near(&fx->sim, 39, 0.15);
+    simfx_free(fx);
 }
 
 static void test_own_pose_maps_to_the_rig_pose_exactly(void **state)
@@ -242,18 +215,9 @@ static void test_malformed_frameset_is_rejected_without_damage(void **state)
     (void)state;
     fixture_t *fx = fixture(0.5, 10, 5);
     rp_vo_mono_cfg_t cfg = mono_cfg(RP_SIM_CAM1, 0.5);
-    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg));
-    rp_sim_frame(&fx->sr, 0, &fx->fs);
-    assert_ok(rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, NULL));
-    rp_sim_frame(&fx->sr, 1, &fx->fs);
-    fx->fs.n[RP_SIM_CAM1] = RP_MAX_FEATS_PER_CAM + 1;
-    assert_status(rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, NULL), RP_E_ARG);
-    assert_true(fx->est.flags & RP_EST_LOST);
-    assert_status(rp_vo_mono_step(&fx->vo, NULL, &fx->est, NULL), RP_E_ARG);
-    rp_sim_frame(&fx->sr, 1, &fx->fs);
-    assert_ok(rp_vo_mono_step(&fx->vo, &fx->fs, &fx->est, NULL));
-    assert_true(fx->est.flags & RP_EST_TRACKING);
-    fixture_free(fx);
+    assert_ok(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg));
+    simfx_check_malformed(&fx->sim, mono_step, fx, RP_SIM_CAM1);
+    simfx_free(fx);
 }
 
 static void test_bad_configuration_is_refused(void **state)
@@ -261,23 +225,23 @@ static void test_bad_configuration_is_refused(void **state)
     (void)state;
     fixture_t *fx = fixture(0.5, 2, 0);
     rp_vo_mono_cfg_t cfg = mono_cfg(9, 0.5); /* no such camera */
-    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = mono_cfg(RP_SIM_CAM1, 0.5);
     cfg.init_depth_m = 0;
-    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = mono_cfg(RP_SIM_CAM1, 0.5);
     cfg.init_depth_sigma_m = -1;
-    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = mono_cfg(RP_SIM_CAM1, 0.5);
     cfg.min_tracked = 2;
-    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = mono_cfg(RP_SIM_CAM1, 0.5);
     cfg.ekf.sigma_px = -1;
-    assert_status(rp_vo_mono_init(&fx->vo, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = mono_cfg(RP_SIM_CAM1, 0.5);
-    assert_status(rp_vo_mono_init(NULL, &fx->sr.rig, &cfg), RP_E_ARG);
+    assert_status(rp_vo_mono_init(NULL, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     assert_status(rp_vo_mono_init(&fx->vo, NULL, &cfg), RP_E_ARG);
-    fixture_free(fx);
+    simfx_free(fx);
 }
 
 int main(void)
