@@ -72,13 +72,20 @@ static int fail(ctx_t *c, rp_cfg_status_t st, const yaml_node_t *at, const char 
     return -1;
 }
 
+/* out = "path.key" (or "key" at the top), cut at KEY_MAX - 1 characters. */
 static void key_path(char *out, const char *path, const char *key)
 {
-    if (path[0] == '\0') {
-        snprintf(out, KEY_MAX, "%s", key);
-    } else {
-        snprintf(out, KEY_MAX, "%s.%s", path, key);
+    size_t n = 0;
+    for (const char *s = path; *s != '\0' && n < KEY_MAX - 1; ++s) {
+        out[n++] = *s;
     }
+    if (n > 0 && n < KEY_MAX - 1) {
+        out[n++] = '.';
+    }
+    for (const char *s = key; *s != '\0' && n < KEY_MAX - 1; ++s) {
+        out[n++] = *s;
+    }
+    out[n] = '\0';
 }
 
 static yaml_node_t *node(ctx_t *c, int index)

@@ -1,0 +1,122 @@
+# daemon/daemon.mk - the rigpose daemon (host and aarch64), its tests and its benchmark section.
+#
+#   $(REL)/rigpose              host daemon (double, Eigen, -O2), built by `make`
+#   $(ARM)/daemon/rigpose       aarch64 daemon (float, Eigen), built by `make cross`
+#   make run-daemon             the daemon on the embedded default, config/sim.yaml
+#   $(BUILD)/bench/daemon.json  latency frame -> LCM publish and sets/s on the simulated rig
+#
+# Included before lcm_types/lcm_types.mk (sorted): paths to the generated bindings are spelt out.
+
+DMN := $(BUILD)/daemon
+DMN_LCM := $(BUILD)/lcmgen
+DMN_INC := -Icore/include -Iplatform/include -Ihost_tools/sim/lib -Idaemon -I$(DMN_LCM)/c
+DMN_WARN := $(WARN) -Wdouble-promotion -Wconversion -Wno-sign-conversion
+DMN_SRC := daemon/rigpose.c daemon/rp_est.c
+DMN_HDRS := $(wildcard core/include/rigpose/*.h platform/include/rigpose/*.h daemon/*.h \
+                       host_tools/sim/lib/*.h)
+# The platform's library (platform/platform.mk): the HAL sources, the sim source and the
+# configuration parser; HAL_LIBS is what it links (libyaml, libpng, libjpeg).
+DMN_HAL_LIB = $(BUILD)/platform/librigpose_hal.a
+DMN_HAL_SAN_LIB = $(BUILD)/platform/san/librigpose_hal.a
+DMN_LDLIBS = $(HAL_LIBS) -llcm -lpthread -lstdc++ -lm
+DMN_VARIANTS := double-eigen float-c
+
+# ---- host daemon --------------------------------------------------------------------------------
+DMN_REL_OBJ := $(patsubst %.c,$(DMN)/rel/%.o,$(DMN_SRC))
+$(DMN)/rel/%.o: %.c $(DMN_HDRS) $(DMN_LCM)/stamp
+	@mkdir -p $(dir $@)
+	$(CC) $(CSTD) $(DMN_WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -O2 -g \
+	    -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EIGEN=1 -c $< -o $@
+
+$(REL)/rigpose: $(DMN_REL_OBJ) $(DMN_LCM)/librigpose_lcm.a $(BUILD)/platform/librigpose_hal.a \
+                $(REL)/librigpose_sim.a $(REL)/librigpose_core.a
+	$(CC) $(DMN_REL_OBJ) $(DMN_LCM)/librigpose_lcm.a $(DMN_HAL_LIB) $(REL)/librigpose_sim.a \
+	    $(REL)/librigpose_core.a -o $@ $(DMN_LDLIBS)
+
+EXTRA_TOOLS += $(REL)/rigpose
+
+.PHONY: run-daemon
+DAEMON_ARGS ?=
+run-daemon: deps $(REL)/rigpose
+	$(REL)/rigpose --config config/sim.yaml $(DAEMON_ARGS)
+
+# ---- tests ---------------------------------------------------------------------------------------
+# cmocka tests of the configuration parser, the sim source and the estimator dispatch, in a
+# double and a float variant (sanitised); then the LCM test between processes (script).
+define DMN_TEST
+$(DMN)/$(1)/test_config: daemon/tests/test_config.c platform/src/rp_config.c $(DMN_HDRS) \
+                         tests/rp_test.h $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a
+	@mkdir -p $$(dir $$@)
+	$(CC) $(CSTD) $(WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) \
+	    daemon/tests/test_config.c platform/src/rp_config.c $(BUILD)/$(1)/librigpose_sim.a \
+	    $(BUILD)/$(1)/librigpose_core.a \
+	    -o $$@ $(SAN) -lyaml -lcmocka -lstdc++ -lm
+$(DMN)/$(1)/test_est: daemon/tests/test_est.c daemon/rp_est.c platform/src/rp_config.c \
+                      platform/src/rp_hal_sim.c $(DMN_HDRS) tests/rp_test.h \
+                      $(BUILD)/platform/san/librigpose_hal.a \
+                      $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a
+	@mkdir -p $$(dir $$@)
+	$(CC) $(CSTD) $(WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) \
+	    daemon/tests/test_est.c daemon/rp_est.c platform/src/rp_config.c \
+	    platform/src/rp_hal_sim.c $$(DMN_HAL_SAN_LIB) $(BUILD)/$(1)/librigpose_sim.a \
+	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) -lcmocka $$(HAL_LIBS) -lstdc++ -lm
+endef
+$(foreach v,$(DMN_VARIANTS),$(eval $(call DMN_TEST,$(v))))
+
+# The LCM test runs the release daemon and Python; its wrapper passes this build's folder.
+$(DMN)/run_test_lcm: daemon/tests/test_lcm.sh daemon/tests/lcm_sub.py
+	@mkdir -p $(dir $@)
+	printf '#!/bin/sh\nexec %s/daemon/tests/test_lcm.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
+	chmod +x $@
+
+DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est)
+HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm
+test: $(DMN_TESTS) $(DMN)/run_test_lcm $(REL)/rigpose $(DMN_LCM)/stamp
+
+# ---- benchmark -----------------------------------------------------------------------------------
+# 300 simulated frame sets as fast as the daemon takes them, published on udpm (ttl=0: this host).
+BENCH_PARTS += $(BUILD)/bench/daemon.json
+$(BUILD)/bench/daemon.json: $(REL)/rigpose FORCE
+	@mkdir -p $(dir $@)
+	@$(REL)/rigpose --config config/sim.yaml --frames 300 --fast --quiet \
+	    --pose-channel RIGPOSE_BENCH_POSE_$$$$ --status-channel RIGPOSE_BENCH_STATUS_$$$$ \
+	    --stats-json $@ | tail -1 >/dev/null
+	@printf 'daemon (sim rig, stereo4, 300 sets, --fast): %s\n' "$$(cat $@)"
+
+# ---- aarch64 daemon --------------------------------------------------------------------------------
+# The board's libraries (LCM, libyaml, libpng, libjpeg, zlib) as Debian arm64 packages, fetched
+# with `apt-get download` and unpacked into a private sysroot $(ARM)/sysroot: never installed.
+# (Debian's liblcm-dev:arm64 cannot be installed beside the host's liblcm-dev: no Multi-Arch;
+# libpng-dev:arm64 / libjpeg-dev:arm64 would pull libc6-dev:arm64 and upgrade host packages.)
+# On the board, `apt install liblcm1 libyaml-0-2 libpng16-16 libjpeg62-turbo` provides them.
+ARM_SYSROOT := $(ARM)/sysroot
+ARM_SYSROOT_DEBS := liblcm1:arm64 liblcm-dev:arm64 libyaml-0-2:arm64 libyaml-dev:arm64 \
+    libpng16-16:arm64 libpng-dev:arm64 zlib1g:arm64 zlib1g-dev:arm64 libjpeg62-turbo:arm64 \
+    libjpeg62-turbo-dev:arm64
+$(ARM_SYSROOT)/stamp: daemon/daemon.mk
+	rm -rf $(ARM_SYSROOT) && mkdir -p $(ARM_SYSROOT)/debs
+	cd $(ARM_SYSROOT)/debs && apt-get download $(ARM_SYSROOT_DEBS)
+	for d in $(ARM_SYSROOT)/debs/*.deb; do dpkg-deb -x $$d $(ARM_SYSROOT); done
+	touch $@
+
+ARM_SYSLIB := $(ARM_SYSROOT)/usr/lib/aarch64-linux-gnu
+DMN_ARM_SRC := $(DMN_SRC) $(sort $(wildcard platform/src/*.c))
+DMN_ARM_OBJ := $(patsubst %.c,$(ARM)/daemon/%.o,$(DMN_ARM_SRC)) \
+               $(patsubst lcm_types/%.lcm,$(ARM)/daemon/lcm/%.o,$(wildcard lcm_types/*.lcm))
+$(ARM)/daemon/%.o: %.c $(DMN_HDRS) $(wildcard platform/src/*.h) $(DMN_LCM)/stamp \
+                   $(ARM_SYSROOT)/stamp
+	@mkdir -p $(dir $@)
+	$(CROSS_PREFIX)gcc $(CSTD) $(DMN_WARN) -Wno-format-truncation -D_DEFAULT_SOURCE $(DMN_INC) \
+	    -idirafter $(ARM_SYSROOT)/usr/include -idirafter $(ARM_SYSROOT)/usr/include/aarch64-linux-gnu \
+	    -O2 -g $(ARMDEF_float) -c $< -o $@
+$(ARM)/daemon/lcm/%.o: $(DMN_LCM)/c/%.c $(DMN_LCM)/stamp $(ARM_SYSROOT)/stamp
+	@mkdir -p $(dir $@)
+	$(CROSS_PREFIX)gcc -std=c99 -O2 -g -Wall -I$(DMN_LCM)/c -idirafter $(ARM_SYSROOT)/usr/include \
+	    -c $< -o $@
+$(ARM)/daemon/rigpose: $(DMN_ARM_OBJ) $(ARM)/float/librigpose_sim.a $(ARM)/float/librigpose_core.a
+	$(CROSS_PREFIX)gcc $(DMN_ARM_OBJ) $(ARM)/float/librigpose_sim.a $(ARM)/float/librigpose_core.a \
+	    -o $@ -L$(ARM_SYSLIB) -Wl,-rpath-link,$(ARM_SYSLIB) -Wl,--allow-shlib-undefined \
+	    -llcm -lyaml -lpng -ljpeg -lz -lpthread -lstdc++ -lm
+	@file $@ | sed 's/, BuildID.*//'
+
+cross: $(ARM)/daemon/rigpose

@@ -1,0 +1,116 @@
+#!/usr/bin/env bash
+# test_lcm.sh BUILD - the rigpose daemon between processes, on this host only (udpm ttl=0, and
+# LCM log files):
+#   1. bad configuration files: the daemon refuses to start (exit 2) naming file:line: key;
+#   2. a separate Python process (PyPI lcm + the lcm-gen types) receives every pose of a
+#      300-frame run in order, no gap in seq;
+#   3. lcm-logger records a run, lcm-logplayer replays the log into a subscriber: every pose;
+#   4. a camera that vanishes mid-run is reported on the status channel and poses keep coming;
+#   5. SIGTERM stops a running daemon cleanly (exit 0, summary printed).
+# Channels carry this process's id, so concurrent runs on the same host do not mix.
+set -u
+BUILD=${1:?usage: test_lcm.sh BUILD}
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+cd "$ROOT"
+DAEMON=$BUILD/release/rigpose
+PY=${PY:-.venv/bin/python}
+export PYTHONPATH=$BUILD/lcmgen/python
+URL='udpm://239.255.76.67:7667?ttl=0'
+TAG=T$$_$RANDOM
+TMP=$(mktemp -d)
+trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$TMP"' EXIT
+pass=0; fail=0
+
+ok()  { echo "ok   $1"; pass=$((pass + 1)); }
+bad() { echo "FAIL $1"; fail=$((fail + 1)); }
+
+# Start the subscriber in the background and wait until it has subscribed.
+start_sub() { # name args...
+  local name=$1; shift
+  rm -f "$TMP/$name.ready"
+  "$PY" daemon/tests/lcm_sub.py --url "$URL" --ready "$TMP/$name.ready" "$@" \
+      >"$TMP/$name.out" 2>&1 &
+  SUB_PID=$!
+  for _ in $(seq 100); do [ -e "$TMP/$name.ready" ] && return 0; sleep 0.1; done
+  echo "subscriber $name did not start:"; cat "$TMP/$name.out"; return 1
+}
+
+# ---- 1. bad configuration files -------------------------------------------------------------
+sed 's/^  method: stereo4/  method: stereo5/' config/sim.yaml >"$TMP/bad_method.yaml"
+sed 's/^    intrinsics: \[800, 800, 319.5, 239.5\]   # fx fy cx cy, px/    intrinsics: [800, 800]/' \
+    config/sim.yaml >"$TMP/bad_intrinsics.yaml"
+grep -v '^version:' config/sim.yaml >"$TMP/no_version.yaml"
+for case in "bad_method.yaml:estimator.method" "bad_intrinsics.yaml:cameras\[0\].intrinsics" \
+            "no_version.yaml:version"; do
+  f=${case%%:*}; key=${case#*:}
+  "$DAEMON" --config "$TMP/$f" --frames 1 >"$TMP/out" 2>"$TMP/err"; rc=$?
+  if [ $rc -eq 2 ] && grep -Eq "$TMP/$f:[0-9]+: $key: " "$TMP/err"; then
+    ok "bad config $f: exit 2, $(cat "$TMP/err")"
+  else
+    bad "bad config $f: exit $rc, stderr: $(cat "$TMP/err")"
+  fi
+done
+"$DAEMON" --config "$TMP/none.yaml" >/dev/null 2>"$TMP/err"; rc=$?
+[ $rc -eq 2 ] && ok "missing config file: exit 2" || bad "missing config file: exit $rc"
+"$DAEMON" --frames 3 >/dev/null 2>&1; rc=$?
+[ $rc -eq 1 ] && ok "no --config: exit 1" || bad "no --config: exit $rc"
+
+# ---- 2. 300 poses to a Python subscriber in another process ----------------------------------
+if start_sub run300 --pose-channel "P_$TAG" --status-channel "S_$TAG" --expect 300; then
+  "$DAEMON" --config config/sim.yaml --frames 300 --fast --quiet --lcm-url "$URL" \
+      --pose-channel "P_$TAG" --status-channel "S_$TAG" >"$TMP/d300" 2>&1; drc=$?
+  wait $SUB_PID; src=$?
+  cat "$TMP/run300.out"; tail -2 "$TMP/d300"
+  [ $drc -eq 0 ] && [ $src -eq 0 ] && ok "300-frame run: every pose received in order" \
+    || bad "300-frame run: daemon exit $drc, subscriber exit $src"
+else bad "300-frame run: no subscriber"; fi
+
+# ---- 3. lcm-logger records, lcm-logplayer replays ---------------------------------------------
+lcm-logger -f --lcm-url="$URL" --channel="P_${TAG}_LOG" "$TMP/run.lcmlog" >"$TMP/logger.out" 2>&1 &
+LOGGER=$!
+sleep 0.5
+"$DAEMON" --config config/sim.yaml --frames 100 --fast --quiet --lcm-url "$URL" \
+    --pose-channel "P_${TAG}_LOG" --status-channel "S_${TAG}_LOG" >"$TMP/dlog" 2>&1; drc=$?
+sleep 0.5
+kill -INT $LOGGER; wait $LOGGER 2>/dev/null
+logsize=$(stat -c %s "$TMP/run.lcmlog" 2>/dev/null || echo 0)
+echo "lcm-logger wrote $logsize bytes"
+if [ $drc -eq 0 ] && start_sub replay --pose-channel "P_${TAG}_LOG" --expect 100; then
+  lcm-logplayer --speed=4 --lcm-url="$URL" "$TMP/run.lcmlog" >"$TMP/player.out" 2>&1; prc=$?
+  wait $SUB_PID; src=$?
+  cat "$TMP/replay.out"
+  [ $prc -eq 0 ] && [ $src -eq 0 ] && ok "lcm-logger + lcm-logplayer: 100 poses replayed in order" \
+    || bad "log replay: player exit $prc, subscriber exit $src"
+else bad "log replay: daemon exit $drc or no subscriber"; fi
+
+# ---- 4. a camera vanishes mid-run ----------------------------------------------------------
+if start_sub drop --pose-channel "P_${TAG}_D" --status-channel "S_${TAG}_D" --expect 120 \
+     --expect-gone 2; then
+  "$DAEMON" --config config/sim.yaml --frames 120 --fast --quiet --sim-drop 2:40 \
+      --lcm-url "$URL" --pose-channel "P_${TAG}_D" --status-channel "S_${TAG}_D" \
+      >"$TMP/ddrop" 2>&1; drc=$?
+  wait $SUB_PID; src=$?
+  cat "$TMP/drop.out"; grep -m1 'gone' "$TMP/ddrop"
+  [ $drc -eq 0 ] && [ $src -eq 0 ] && ok "camera 2 gone from set 40: reported on status, 120 poses" \
+    || bad "camera drop: daemon exit $drc, subscriber exit $src"
+else bad "camera drop: no subscriber"; fi
+
+# ---- 5. SIGTERM ------------------------------------------------------------------------------
+"$DAEMON" --config config/sim.yaml --quiet --lcm-url "$URL" --pose-channel "P_${TAG}_T" \
+    --status-channel "S_${TAG}_T" >"$TMP/dterm" 2>&1 &
+DPID=$!
+sleep 1.5
+t0=$(date +%s%N)
+kill -TERM $DPID; wait $DPID; rc=$?
+ms=$(( ($(date +%s%N) - t0) / 1000000 ))
+if [ $rc -eq 0 ] && grep -q 'stopped by signal' "$TMP/dterm"; then
+  ok "SIGTERM: exit 0 after ${ms} ms; $(grep 'poses published' "$TMP/dterm")"
+else
+  bad "SIGTERM: exit $rc; $(cat "$TMP/dterm")"
+fi
+
+echo
+if [ $fail -eq 0 ]; then echo "[  PASSED  ] $pass test(s)."; exit 0; fi
+echo "[  PASSED  ] $pass test(s)."
+echo "[  FAILED  ] $fail test(s)."
+exit 1
