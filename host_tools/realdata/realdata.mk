@@ -1,0 +1,52 @@
+# host_tools/realdata/realdata.mk - rigpose-realdata: rigpose's stereo layout on real camera data
+# (KITTI 00, EuRoC MH01 in ../shared/data; included by the top-level Makefile).
+#
+#   make $(REL)/rigpose-realdata   the program
+#   make test                      host_tools/realdata/test_realdata.sh: 20 frames of each
+#                                  sequence within the targets (skipped if the data is absent)
+#   make bench                     $(BUILD)/bench/realdata.json: kitti00_ate_percent,
+#                                  euroc_mh01_ate_m, ... (QUICK=1: 40 frames of each)
+#
+# The images are larger than the default build's tracker limit (640x480: KITTI is 1241x376,
+# EuRoC 752x480), so the program links its own release build of the core with
+# RP_TRACK_MAX_W x RP_TRACK_MAX_H = 1248 x 480 (double, Eigen, -O2), in $(BUILD)/realdata; its
+# own sources must see the same limits (the structs' sizes follow them).
+
+RD_DIR := $(BUILD)/realdata
+RD_BIN := $(REL)/rigpose-realdata
+RD_DEFS := -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EIGEN=1 -DRP_TRACK_MAX_W=1248 -DRP_TRACK_MAX_H=480
+$(eval $(call CORE_LIB,realdata,$(RD_DIR),$(CC),$(CXX),-O2 -g -DNDEBUG $(RD_DEFS),ar))
+
+# Recursively expanded: pkg-config runs when the recipe runs, after `deps` installed OpenCV.
+RD_CXXFLAGS = -std=c++17 -O2 -g -DNDEBUG $(RD_DEFS) $(WARN) \
+    $(patsubst -I%,-isystem %,$(shell pkg-config --cflags opencv4)) $(INC) -Ihost_tools/realdata
+RD_LIBS = -lopencv_imgcodecs -lopencv_core -lm
+RD_SRC := host_tools/realdata/rigpose_realdata.cpp host_tools/realdata/rp_realdata.cpp
+RD_HDR := $(wildcard host_tools/realdata/*.hpp core/include/rigpose/*.h)
+
+$(RD_BIN): $(RD_SRC) $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
+	mkdir -p $(REL)
+	$(CXX) $(RD_CXXFLAGS) $(RD_SRC) $(RD_DIR)/librigpose_core.a -o $@ $(RD_LIBS)
+
+EXTRA_TOOLS += $(RD_BIN)
+
+# The data: ../shared/data beside the repository, or $RIGPOSE_DATA.
+RD_DATA = $(or $(RIGPOSE_DATA),$(abspath $(CURDIR)/../shared/data))
+
+HOST_EXTRA_TESTS += host_tools/realdata/test_realdata.sh
+test: $(RD_BIN)
+export RP_REALDATA_BIN = $(RD_BIN)
+
+RD_BENCH_KITTI ?= $(if $(filter 1,$(QUICK)),40,100)
+RD_BENCH_EUROC ?= $(if $(filter 1,$(QUICK)),40,150)
+BENCH_PARTS += $(BUILD)/bench/realdata.json
+$(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
+	@mkdir -p $(BUILD)/bench
+	@if [ -d "$(RD_DATA)/kitti00_000-099" ] && [ -d "$(RD_DATA)/euroc_mh01_000-149" ]; then \
+	  $(RD_BIN) --kitti $(RD_DATA)/kitti00_000-099 --frames $(RD_BENCH_KITTI) --quiet \
+	      --json-out $(RD_DIR)/kitti00.json && \
+	  $(RD_BIN) --euroc $(RD_DATA)/euroc_mh01_000-149 --frames $(RD_BENCH_EUROC) --quiet \
+	      --json-out $(RD_DIR)/euroc_mh01.json && \
+	  $(PY) host_tools/bench/merge_json.py $@ $(RD_DIR)/kitti00.json $(RD_DIR)/euroc_mh01.json; \
+	else echo "realdata: no data in $(RD_DATA) (set RIGPOSE_DATA): figures left out"; \
+	  echo '{}' > $@; fi

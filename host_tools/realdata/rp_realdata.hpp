@@ -1,0 +1,89 @@
+/*
+ * rp_realdata.hpp - real stereo sequences for rigpose (host only, C++ with OpenCV): loaders of a
+ * KITTI odometry folder and of an EuRoC MAV folder into one Sequence (the rig of one stereo
+ * pair, the frames' image paths and times, the ground truth in rigpose's conventions), the
+ * conversions between rigpose's pose vector and the datasets' poses, and the trajectory error.
+ *
+ * rigpose's conventions (DESIGN.md): the world is cam1's frame at the first frame; a pose is
+ * p = [tx ty tz alpha beta gamma]: cam1's position in the world (m) and its rotation
+ * R = Rz(gamma) Ry(beta) Rx(alpha) (camera-to-world). Here cam1 (rig camera 0) is the left
+ * camera of the pair (KITTI image_0 / "left", EuRoC cam0), rig camera 1 the right one.
+ *
+ *   KITTI:  poses.txt line j is [R|t] taking points of the left camera at frame j into the left
+ *           camera at frame 0: exactly (R_j, d_j). Rectified pinhole pair: P0, P1 of calib.txt,
+ *           the right camera at D = (-P1[0][3] / P1[0][0], 0, 0), no rotation, no distortion.
+ *   EuRoC:  camera pose in the world T_WC = T_WB T_BS (groundtruth.txt body pose at the nearest
+ *           timestamp, T_BS of the camera's sensor.yaml); expressed in the first frame's cam0:
+ *           T_j = T_WC0(0)^-1 T_WC0(j). The pair: R_1, D_1 of T_BS0^-1 T_BS1; intrinsics and
+ *           radial-tangential distortion (k1 k2 p1 p2, k3 = 0) per camera.
+ */
+#ifndef RP_REALDATA_HPP
+#define RP_REALDATA_HPP
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rigpose/rp_rig.h"
+
+namespace rprd {
+
+/* A rigid transform: x' = R x + t (R row-major). */
+struct Pose {
+    double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    double t[3] = {0, 0, 0};
+};
+
+Pose pose_mul(const Pose &a, const Pose &b);  /* a * b */
+Pose pose_inv(const Pose &a);                 /* a^-1 */
+
+/* rigpose's pose vector [tx ty tz alpha beta gamma] of a camera-to-world pose, and back
+ * (through the core's rp_rot_to_angles / rp_rot_from_angles). */
+void pose_to_vec(const Pose &T, double p[6]);
+Pose pose_from_vec(const double p[6]);
+
+enum class Format { KITTI, EUROC };
+
+struct Sequence {
+    Format format = Format::KITTI;
+    std::string name;                      /* "kitti00", "euroc_mh01": figure prefix */
+    std::string dir;                       /* the dataset folder */
+    rp_rig_t rig;                          /* camera 0 left (cam1), camera 1 right */
+    std::vector<int64_t> utime;            /* per frame, us */
+    std::vector<std::string> img[2];       /* per frame: left and right image paths */
+    std::vector<Pose> truth;               /* per frame: cam1 in the world (first cam1 frame) */
+};
+
+/* Load max_frames frames (0: all) of a folder from its frame `first` on; that frame's cam1 is
+ * the world. On failure returns false with a message in *err (missing file, malformed line,
+ * no ground truth near a frame, no frame...). */
+bool load_kitti(const std::string &dir, size_t first, size_t max_frames, Sequence *seq,
+                std::string *err);
+bool load_euroc(const std::string &dir, size_t first, size_t max_frames, Sequence *seq,
+                std::string *err);
+
+/* Trajectory error against the truth, frame by frame, no alignment beyond the shared start
+ * (both start at the identity). */
+struct FrameErr {
+    double trans_m;  /* |d_est - d_true| */
+    double rot_rad;  /* angle of R_est^T R_true */
+};
+FrameErr frame_error(const double p_est[6], const Pose &truth);
+
+struct Summary {
+    size_t frames = 0;
+    double rpe_percent = 0.0; /* relative pose error: sum over frames j >= 1 of
+                               * |t(T_est(j-1)^-1 T_est(j)) - t(T_true(j-1)^-1 T_true(j))|, in
+                               * percent of the path (frame-to-frame drift, whatever the start) */
+    double path_m = 0.0;     /* length of the true path over the frames */
+    double ate_m = 0.0;      /* RMSE of trans_m over the frames */
+    double ate_percent = 0.0; /* 100 ate_m / path_m */
+    double max_m = 0.0;      /* largest trans_m */
+    double final_m = 0.0;    /* trans_m at the last frame */
+    double rot_rmse_deg = 0.0;
+};
+Summary summarise(const std::vector<Pose> &est, const std::vector<Pose> &truth);
+
+}  // namespace rprd
+
+#endif /* RP_REALDATA_HPP */
