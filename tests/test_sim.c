@@ -1,15 +1,20 @@
 /*
  * test_sim.c - the simulator follows the paper's protocol (DESIGN.md, Table 1) exactly, and is
- * a deterministic function of (seed, run, frame).
+ * a deterministic function of (seed, run, frame). The layout study's placements: files parse,
+ * malformed lines are reported with their line, the ranking is sorted, and the paper's placement
+ * reproduces the plain gc figures while another placement changes them.
  */
 #include "rp_test.h"
 
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "rigpose/rp_rig.h"
 #include "rigpose/rp_rot.h"
 #include "rp_sim.h"
+#include "rp_sim_layout.h"
+#include "sim_fixture.h"
 
 #define PI 3.14159265358979323846
 
@@ -490,6 +495,214 @@ static void ids_are_consistent_between_stereo_partners(void **state)
     rp_sim_run_free(&sr);
 }
 
+/* ---- layout study ---------------------------------------------------------------------- */
+
+static void write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    assert_true(fputs(text, f) >= 0);
+    assert_int_equal(fclose(f), 0);
+}
+
+static void layout_file_parses(void **state)
+{
+    (void)state;
+    char path[] = "/tmp/rp_test_layout_XXXXXX";
+    const int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    write_file(path, "# name  cam2 x y z yaw   cam4 x y z yaw\n"
+                     "\n"
+                     "paper   0.0866 0 -0.05 90   -0.0866 0 -0.05 -90   # the paper's\n"
+                     "wide\t0.25 0.01 -0.05 60 -0.25 0.01 -0.05 -60\r\n"
+                     "   forward 0 0 0.1 0 0 0 -0.2 180\n");
+    rp_sim_layout_t l[4];
+    char err[200] = "";
+    assert_int_equal(rp_sim_layout_read(path, l, 4, err, sizeof err), 3);
+    assert_string_equal(l[0].name, "paper");
+    assert_true(l[0].is_paper);
+    const rp_sim_layout_t p = rp_sim_layout_paper();
+    assert_memory_equal(&l[0].cam2, &p.cam2, sizeof p.cam2); /* snapped exactly */
+    assert_memory_equal(&l[0].cam4, &p.cam4, sizeof p.cam4);
+    assert_string_equal(l[1].name, "wide");
+    assert_false(l[1].is_paper);
+    assert_near(l[1].cam2.D[0], 0.25, 1e-15);
+    assert_near(l[1].cam2.D[1], 0.01, 1e-15);
+    assert_near(l[1].cam2.yaw, PI / 3.0, 1e-12);
+    assert_near(l[1].cam4.yaw, -PI / 3.0, 1e-12);
+    assert_string_equal(l[2].name, "forward");
+    assert_near(l[2].cam4.D[2], -0.2, 1e-15);
+    assert_near(l[2].cam4.yaw, PI, 1e-12);
+    /* The placement reaches the rig: cam2 of "wide" looks 60 degrees right of forward. */
+    rp_sim_cfg_t cfg;
+    rp_sim_default_cfg(&cfg);
+    rp_sim_layout_apply(&l[1], &cfg);
+    rp_rig_t rig;
+    rp_sim_make_rig(&cfg, &rig);
+    assert_near(rig.cam[RP_SIM_CAM2].D[0], 0.25, 1e-6);
+    assert_near(rig.cam[RP_SIM_CAM2].R[2], sin(PI / 3.0), 1e-6); /* z axis, x component */
+    assert_near(rig.cam[RP_SIM_CAM2].R[8], cos(PI / 3.0), 1e-6);
+    assert_ok(rp_rig_check(&rig));
+    remove(path);
+}
+
+/* A file whose line `bad_line` is `text`; the error must name path:line and contain `why`. */
+static void expect_error(const char *lines, int bad_line, const char *why)
+{
+    char path[] = "/tmp/rp_test_layout_XXXXXX";
+    const int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    write_file(path, lines);
+    rp_sim_layout_t l[4];
+    char err[300] = "", want[300];
+    assert_int_equal(rp_sim_layout_read(path, l, 4, err, sizeof err), -1);
+    if (bad_line > 0) {
+        snprintf(want, sizeof want, "%s:%d: ", path, bad_line);
+    } else {
+        snprintf(want, sizeof want, "%s: ", path);
+    }
+    print_message("  %s\n", err);
+    assert_non_null(strstr(err, want));
+    assert_non_null(strstr(err, why));
+    remove(path);
+}
+
+static void malformed_lines_give_errors_naming_the_line(void **state)
+{
+    (void)state;
+    const char *good = "a 0.1 0 0 90 -0.1 0 0 -90\n";
+    char text[600];
+    snprintf(text, sizeof text, "%s# comment\nb 0.1 0 0 90 -0.1 0 0\n", good);
+    expect_error(text, 3, "got 8 fields");
+    snprintf(text, sizeof text, "%s%sc 0.1 0 0 ninety -0.1 0 0 -90\n", good, "\n");
+    expect_error(text, 3, "'ninety' is not a finite number");
+    snprintf(text, sizeof text, "%sd 0.1 0 0 90 -0.1 0 0 -90 7\n", good);
+    expect_error(text, 2, "got 10 fields");
+    snprintf(text, sizeof text, "%sa 0.2 0 0 90 -0.2 0 0 -90\n", good);
+    expect_error(text, 2, "'a' given twice");
+    snprintf(text, sizeof text, "%se 0.1 0 0 nan -0.1 0 0 -90\n", good);
+    expect_error(text, 2, "not a finite number");
+    snprintf(text, sizeof text, "%sf 0.1 0 0 400 -0.1 0 0 -90\n", good);
+    expect_error(text, 2, "yaw 400 out of range");
+    snprintf(text, sizeof text, "%sg 50 0 0 90 -0.1 0 0 -90\n", good);
+    expect_error(text, 2, "offset 50 out of range");
+    snprintf(text, sizeof text, "%s0123456789012345678901234567890123 0.1 0 0 90 -0.1 0 0 -90\n",
+             good);
+    expect_error(text, 2, "longer than 31 characters");
+    expect_error("# only a comment\n\n", 0, "no placements");
+    char err[200];
+    rp_sim_layout_t l[1];
+    assert_int_equal(rp_sim_layout_read("/nonexistent/layout.txt", l, 1, err, sizeof err), -1);
+    assert_non_null(strstr(err, "/nonexistent/layout.txt: cannot open"));
+    /* more placements than the caller's array */
+    char path[] = "/tmp/rp_test_layout_XXXXXX";
+    const int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    write_file(path, "a 0.1 0 0 90 -0.1 0 0 -90\nb 0.1 0 0 90 -0.1 0 0 -90\n");
+    assert_int_equal(rp_sim_layout_read(path, l, 1, err, sizeof err), -1);
+    assert_non_null(strstr(err, ":2: more than 1 placements"));
+    remove(path);
+}
+
+static void ranking_is_sorted_ties_stable_nan_last(void **state)
+{
+    (void)state;
+    enum { N = 40 };
+    double key[N];
+    uint32_t order[N];
+    for (int i = 0; i < N; ++i) {
+        key[i] = floor(rp_test_urand(0.0, 8.0)) * 1e-3; /* many ties */
+    }
+    key[5] = NAN;
+    key[17] = NAN;
+    rp_sim_layout_rank(key, N, order);
+    uint8_t seen[N] = {0};
+    for (int k = 0; k < N; ++k) {
+        assert_true(order[k] < N);
+        assert_false(seen[order[k]]);
+        seen[order[k]] = 1;
+        if (k == 0) continue;
+        const double a = key[order[k - 1]], b = key[order[k]];
+        if (isnan(a)) {
+            assert_true(isnan(b));
+            assert_true(order[k - 1] < order[k]);
+        } else if (!isnan(b)) {
+            assert_true(a <= b);
+            if (a == b) assert_true(order[k - 1] < order[k]);
+        }
+    }
+    assert_int_equal(order[N - 2], 5);
+    assert_int_equal(order[N - 1], 17);
+    /* The built-in grid: 27 placements, the paper's first and only once, names unique. */
+    rp_sim_layout_t grid[RP_SIM_LAYOUT_MAX];
+    const int n = rp_sim_layout_grid(grid, RP_SIM_LAYOUT_MAX);
+    assert_int_equal(n, 27);
+    int papers = 0;
+    for (int i = 0; i < n; ++i) {
+        papers += grid[i].is_paper;
+        for (int j = 0; j < i; ++j) assert_string_not_equal(grid[i].name, grid[j].name);
+    }
+    assert_int_equal(papers, 1);
+    assert_true(grid[0].is_paper);
+    assert_int_equal(rp_sim_layout_grid(grid, 5), 5);
+}
+
+/* gc's mean errors over a few short runs of cfg. */
+static void gc_errors(const rp_sim_cfg_t *cfg, double err[6])
+{
+    static rp_vo_gc_t vo;
+    static rp_frameset_t fs;
+    const rp_vo_gc_cfg_t gcfg = simfx_gc_cfg(cfg->noise_px);
+    memset(err, 0, 6 * sizeof(double));
+    for (uint32_t r = 0; r < 2; ++r) {
+        rp_sim_run_t sr;
+        assert_int_equal(rp_sim_run_init(&sr, cfg, 1, r), 0);
+        assert_ok(rp_vo_gc_init(&vo, &sr.rig, &gcfg));
+        for (uint32_t j = 0; j < cfg->n_frames; ++j) {
+            rp_estimate_t est;
+            rp_sim_frame(&sr, j, &fs);
+            (void)rp_vo_gc_step(&vo, &fs, &est);
+            for (int i = 0; j > 0 && i < 6; ++i) {
+                double d = (double)est.p[i] - sr.truth[6 * j + i];
+                if (i >= 3) d = (double)rp_angle_wrap((rp_real)d);
+                err[i] += fabs(d);
+            }
+        }
+        rp_sim_run_free(&sr);
+    }
+}
+
+static void paper_placement_reproduces_the_plain_gc_figures(void **state)
+{
+    (void)state;
+    rp_sim_cfg_t plain, paper, other;
+    rp_sim_default_cfg(&plain);
+    plain.n_frames = 30;
+    paper = plain;
+    other = plain;
+    rp_sim_layout_t grid[RP_SIM_LAYOUT_MAX];
+    assert_int_equal(rp_sim_layout_grid(grid, RP_SIM_LAYOUT_MAX), 27);
+    rp_sim_layout_apply(&grid[0], &paper);
+    rp_sim_layout_apply(&grid[26], &other);
+    rp_rig_t a, b;
+    rp_sim_make_rig(&plain, &a);
+    rp_sim_make_rig(&paper, &b);
+    assert_memory_equal(&a, &b, sizeof a); /* the very same rig */
+    double e_plain[6], e_paper[6], e_other[6];
+    gc_errors(&plain, e_plain);
+    gc_errors(&paper, e_paper);
+    gc_errors(&other, e_other);
+    print_message("  gc tx over 2 x 30 frames: plain %.6e, paper placement %.6e, %s %.6e\n",
+                  e_plain[0] / 58, e_paper[0] / 58, grid[26].name, e_other[0] / 58);
+    for (int i = 0; i < 6; ++i) assert_true(e_plain[i] == e_paper[i]);
+    int differs = 0;
+    for (int i = 0; i < 6; ++i) differs |= e_other[i] != e_plain[i];
+    assert_true(differs);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -503,6 +716,10 @@ int main(void)
         cmocka_unit_test(visibility_rule_is_respected),
         cmocka_unit_test(a_crowded_camera_keeps_the_nearest),
         cmocka_unit_test(ids_are_consistent_between_stereo_partners),
+        cmocka_unit_test(layout_file_parses),
+        cmocka_unit_test(malformed_lines_give_errors_naming_the_line),
+        cmocka_unit_test(ranking_is_sorted_ties_stable_nan_last),
+        cmocka_unit_test(paper_placement_reproduces_the_plain_gc_figures),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

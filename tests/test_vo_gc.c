@@ -20,20 +20,9 @@ static fixture_t *fixture(double noise_px, uint32_t frames, uint32_t run)
     return simfx_new(sizeof(fixture_t), noise_px, frames, run);
 }
 
-/* The simulator's configuration of gc: cam1..cam4, the shell's mid depth. */
 static rp_vo_gc_cfg_t gc_cfg(double noise_px)
 {
-    rp_vo_gc_cfg_t c = rp_vo_gc_default_cfg();
-    c.n_cams = 4;
-    c.cams[0] = RP_SIM_CAM1;
-    c.cams[1] = RP_SIM_CAM2;
-    c.cams[2] = RP_SIM_CAM3;
-    c.cams[3] = RP_SIM_CAM4;
-    c.init_depth_m = RP_C(0.8335);
-    c.init_depth_sigma_m = RP_C(0.15);
-    c.init_on_sphere = 1;
-    c.ekf.sigma_px = noise_px > 0 ? (rp_real)noise_px : RP_C(0.01);
-    return c;
+    return simfx_gc_cfg(noise_px);
 }
 
 typedef struct {

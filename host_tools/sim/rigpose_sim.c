@@ -11,6 +11,11 @@
  *
  * usage: rigpose-sim [--methods LIST] [--runs N] [--frames N] [--seed S] [--focal-px F]
  *                    [--noise-px S] [--threads N] [--json] [--help]
+ *        rigpose-sim --layout-study [FILE] [same options]
+ *
+ * The layout study runs the selected methods (default gc,rc; 20 runs) once per candidate
+ * placement of cam2 and cam4 (from FILE, format in rp_sim_layout.h, or the built-in grid) and
+ * prints the placements ranked by the first method's mean translation error.
  */
 #include <errno.h>
 #include <math.h>
@@ -27,6 +32,7 @@
 #include "rigpose/rp_vo_mono.h"
 #include "rigpose/rp_vo_stereo.h"
 #include "rp_sim.h"
+#include "rp_sim_layout.h"
 
 #define SIM_PI 3.14159265358979323846
 #define MAX_METHODS 16
@@ -264,6 +270,9 @@ typedef struct {
     int json;
     uint32_t ekf_iterations;
     int no_refine;
+    int layout_study;         /* --layout-study given */
+    const char *layout_file;  /* its FILE, or NULL for the built-in grid */
+    int methods_given, runs_given;
 } opts_t;
 
 static void usage(FILE *out, const char *argv0)
@@ -289,6 +298,11 @@ static void usage(FILE *out, const char *argv0)
             "                   1 = the plain EKF), for ablation\n"
             "  --no-refine      keep each landmark's first triangulation (the paper's\n"
             "                   structure) instead of refining it, for ablation\n"
+            "  --layout-study [FILE]  rank placements of cam2/cam4 (FILE: one per line,\n"
+            "                   'name x2 y2 z2 yaw2_deg x4 y4 z4 yaw4_deg', cam1's frame, m;\n"
+            "                   no FILE: the built-in grid of 27 around the paper's) by the\n"
+            "                   first method's mean translation error; methods default to\n"
+            "                   gc,rc and runs to 20\n"
             "  --json           print one JSON object instead of the table\n"
             "  --help           this text\n");
 }
@@ -398,6 +412,18 @@ static int parse_args(int argc, char **argv, opts_t *o)
             o->no_refine = 1;
             continue;
         }
+        if (strcmp(arg, "--layout-study") == 0) {
+            o->layout_study = 1;
+            if (i + 1 < argc && strncmp(argv[i + 1], "--", 2) != 0) {
+                o->layout_file = argv[++i];
+            }
+            continue;
+        }
+        if (strncmp(arg, "--layout-study=", 15) == 0) {
+            o->layout_study = 1;
+            o->layout_file = arg + 15;
+            continue;
+        }
         /* --name value or --name=value */
         char name[32];
         const char *val;
@@ -427,8 +453,10 @@ static int parse_args(int argc, char **argv, opts_t *o)
         uint32_t threads = 0;
         if (strcmp(name, "--methods") == 0) {
             bad = parse_methods(val, o);
+            o->methods_given = 1;
         } else if (strcmp(name, "--runs") == 0) {
             bad = parse_u32(val, 1, 100000000u, &o->runs);
+            o->runs_given = 1;
         } else if (strcmp(name, "--frames") == 0) {
             bad = parse_u32(val, 2, 1000000u, &o->frames);
         } else if (strcmp(name, "--seed") == 0) {
@@ -449,6 +477,14 @@ static int parse_args(int argc, char **argv, opts_t *o)
         if (bad) {
             fprintf(stderr, "rigpose-sim: bad value for %s: '%s'\n", name, val ? val : "");
             return -1;
+        }
+    }
+    if (o->layout_study) {
+        if (!o->methods_given && parse_methods("gc,rc", o)) {
+            return -1;
+        }
+        if (!o->runs_given) {
+            o->runs = 20;
         }
     }
     return 0;
@@ -701,37 +737,21 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
     }
 }
 
-int main(int argc, char **argv)
+/* Run every (method, run) of o on the simulation cfg into res[method][run], on o->threads
+ * threads. Returns the number of threads used (>= 1), or 0 with the reason printed. */
+static unsigned run_experiment(const opts_t *o, const rp_sim_cfg_t *cfg, run_result_t *res)
 {
-    opts_t o;
-    const int pa = parse_args(argc, argv, &o);
-    if (pa != 0) {
-        usage(pa > 0 ? stdout : stderr, argv[0]);
-        return pa > 0 ? 0 : 2;
-    }
-    if (o.threads > o.runs) {
-        o.threads = o.runs;
-    }
-
     job_t job;
     memset(&job, 0, sizeof job);
-    job.o = &o;
-    rp_sim_default_cfg(&job.cfg);
-    job.cfg.focal_px = o.focal_px;
-    job.cfg.noise_px = o.noise_px;
-    job.cfg.n_frames = o.frames;
-    job.res = calloc((size_t)o.n_methods * o.runs, sizeof *job.res);
-    double *scratch = malloc((size_t)o.runs * sizeof *scratch);
-    summary_t *sum = calloc(o.n_methods, sizeof *sum);
-    if (!job.res || !scratch || !sum) {
-        fprintf(stderr, "rigpose-sim: out of memory\n");
-        return 1;
-    }
+    job.o = o;
+    job.cfg = *cfg;
+    job.res = res;
+    memset(res, 0, (size_t)o->n_methods * o->runs * sizeof *res);
     pthread_mutex_init(&job.lock, NULL);
 
     pthread_t tid[MAX_THREADS];
     unsigned started = 0;
-    for (unsigned t = 0; t < o.threads; ++t) {
+    for (unsigned t = 0; t < o->threads; ++t) {
         if (pthread_create(&tid[t], NULL, worker, &job) != 0) {
             break;
         }
@@ -746,20 +766,200 @@ int main(int argc, char **argv)
     pthread_mutex_destroy(&job.lock);
     if (job.failed) {
         fprintf(stderr, "rigpose-sim: %s\n", job.why);
+        return 0;
+    }
+    return started ? started : 1;
+}
+
+/* ---- the layout study ---------------------------------------------------------------------- */
+
+/* One method on one placement: mean translation / rotation error over all scored frames (the
+ * mean of tx ty tz, of alpha beta gamma) and the worst run's. */
+typedef struct {
+    double t, r;             /* m, rad */
+    double worst_t, worst_r; /* largest per-run means, m, rad */
+    double tx;               /* mean |tx error|, m */
+    uint64_t lost;
+} layout_score_t;
+
+static void layout_score(const opts_t *o, const run_result_t *res, layout_score_t *sc)
+{
+    const double per_run = (double)(o->frames - 1);
+    memset(sc, 0, sizeof *sc);
+    for (uint32_t r = 0; r < o->runs; ++r) {
+        const double t = (res[r].err_sum[0] + res[r].err_sum[1] + res[r].err_sum[2]) / 3.0;
+        const double a = (res[r].err_sum[3] + res[r].err_sum[4] + res[r].err_sum[5]) / 3.0;
+        sc->t += t;
+        sc->r += a;
+        sc->tx += res[r].err_sum[0];
+        sc->worst_t = fmax(sc->worst_t, t / per_run);
+        sc->worst_r = fmax(sc->worst_r, a / per_run);
+        sc->lost += res[r].lost;
+    }
+    sc->t /= per_run * o->runs;
+    sc->r /= per_run * o->runs;
+    sc->tx /= per_run * o->runs;
+}
+
+static void print_place(const rp_sim_place_t *p)
+{
+    printf(" %7.4f %7.4f %7.4f %5.0f", p->D[0], p->D[1], p->D[2], p->yaw * 180.0 / SIM_PI);
+}
+
+static void print_layout_json(const opts_t *o, const rp_sim_layout_t *lay, uint32_t n,
+                              const layout_score_t *sc, const uint32_t *order)
+{
+    printf("{\"runs\": %u, \"frames\": %u, \"seed\": %llu, \"source\": \"%s\", "
+           "\"ranked_by\": \"%s mean translation error\", \"placements\": [",
+           o->runs, o->frames, (unsigned long long)o->seed,
+           o->layout_file ? o->layout_file : "grid", o->m[0]->name);
+    for (uint32_t k = 0; k < n; ++k) {
+        const uint32_t i = order[k];
+        const rp_sim_layout_t *l = &lay[i];
+        printf("%s{\"rank\": %u, \"name\": \"%s\", \"paper\": %s, "
+               "\"cam2\": [%.6g, %.6g, %.6g, %.6g], \"cam4\": [%.6g, %.6g, %.6g, %.6g]",
+               k ? ", " : "", k + 1, l->name, l->is_paper ? "true" : "false", l->cam2.D[0],
+               l->cam2.D[1], l->cam2.D[2], l->cam2.yaw * 180.0 / SIM_PI, l->cam4.D[0],
+               l->cam4.D[1], l->cam4.D[2], l->cam4.yaw * 180.0 / SIM_PI);
+        for (unsigned m = 0; m < o->n_methods; ++m) {
+            const layout_score_t *s = &sc[(size_t)i * o->n_methods + m];
+            printf(", \"%s\": {", o->m[m]->name);
+            json_num("t", s->t, 1);
+            json_num("r", s->r, 1);
+            json_num("tx", s->tx, 1);
+            json_num("worst_run_t", s->worst_t, 1);
+            json_num("worst_run_r", s->worst_r, 1);
+            printf("\"lost_frames\": %llu}", (unsigned long long)s->lost);
+        }
+        printf("}");
+    }
+    printf("]}\n");
+}
+
+static void print_layout_table(const opts_t *o, const rp_sim_layout_t *lay, uint32_t n,
+                               const layout_score_t *sc, const uint32_t *order)
+{
+    printf("rigpose-sim --layout-study: %u placements of cam2/cam4 (%s), ranked by %s's mean "
+           "translation error\n"
+           "  %u runs x %u frames per placement, seed %llu, %u thread%s; t = mean of |tx|,|ty|,"
+           "|tz| (m), r = mean of |alpha|,|beta|,|gamma| (rad),\n"
+           "  worst = the worst run's mean; * = the paper's placement\n\n",
+           n, o->layout_file ? o->layout_file : "built-in grid", o->m[0]->name, o->runs,
+           o->frames, (unsigned long long)o->seed, o->threads, o->threads == 1 ? "" : "s");
+    printf("%-4s  %-22s %-29s %-29s", "rank", "placement", "  cam2: x       y       z  yaw",
+           "  cam4: x       y       z  yaw");
+    for (unsigned m = 0; m < o->n_methods; ++m) {
+        printf(" | %-6s%9s%9s%9s%9s", o->m[m]->name, "t", "r", "worst t", "worst r");
+    }
+    printf("\n");
+    for (uint32_t k = 0; k < n; ++k) {
+        const uint32_t i = order[k];
+        printf("%3u%s  %-22s", k + 1, lay[i].is_paper ? "*" : " ", lay[i].name);
+        print_place(&lay[i].cam2);
+        print_place(&lay[i].cam4);
+        for (unsigned m = 0; m < o->n_methods; ++m) {
+            const layout_score_t *s = &sc[(size_t)i * o->n_methods + m];
+            printf(" | %-6s%9.6f%9.6f%9.6f%9.6f", "", s->t, s->r, s->worst_t, s->worst_r);
+        }
+        printf("\n");
+    }
+}
+
+static int layout_study(opts_t *o, const rp_sim_cfg_t *base, run_result_t *res)
+{
+    static rp_sim_layout_t lay[RP_SIM_LAYOUT_MAX];
+    char err[300];
+    int n = o->layout_file ? rp_sim_layout_read(o->layout_file, lay, RP_SIM_LAYOUT_MAX, err,
+                                                sizeof err)
+                           : rp_sim_layout_grid(lay, RP_SIM_LAYOUT_MAX);
+    if (n < 0) {
+        fprintf(stderr, "rigpose-sim: %s\n", err);
+        return 2;
+    }
+    layout_score_t *sc = calloc((size_t)n * o->n_methods, sizeof *sc);
+    double *key = calloc((size_t)n, sizeof *key);
+    uint32_t *order = calloc((size_t)n, sizeof *order);
+    if (!sc || !key || !order) {
+        fprintf(stderr, "rigpose-sim: out of memory\n");
         return 1;
     }
-    o.threads = started ? started : 1;
-
-    for (unsigned m = 0; m < o.n_methods; ++m) {
-        summarise(&o, &job.res[(size_t)m * o.runs], scratch, &sum[m]);
+    unsigned used = 1;
+    for (int i = 0; i < n; ++i) {
+        rp_sim_cfg_t cfg = *base;
+        rp_sim_layout_apply(&lay[i], &cfg);
+        used = run_experiment(o, &cfg, res);
+        if (used == 0) {
+            return 1;
+        }
+        for (unsigned m = 0; m < o->n_methods; ++m) {
+            layout_score(o, &res[(size_t)m * o->runs], &sc[(size_t)i * o->n_methods + m]);
+        }
+        key[i] = sc[(size_t)i * o->n_methods].t;
+        if (!o->json) {
+            fprintf(stderr, "\r  placement %d/%d", i + 1, n);
+        }
     }
-    if (o.json) {
-        print_json(&o, sum);
+    if (!o->json) {
+        fprintf(stderr, "\n");
+    }
+    o->threads = used;
+    rp_sim_layout_rank(key, (uint32_t)n, order);
+    if (o->json) {
+        print_layout_json(o, lay, (uint32_t)n, sc, order);
     } else {
-        print_table(&o, &job.cfg, sum);
+        print_layout_table(o, lay, (uint32_t)n, sc, order);
+    }
+    free(order);
+    free(key);
+    free(sc);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    opts_t o;
+    const int pa = parse_args(argc, argv, &o);
+    if (pa != 0) {
+        usage(pa > 0 ? stdout : stderr, argv[0]);
+        return pa > 0 ? 0 : 2;
+    }
+    if (o.threads > o.runs) {
+        o.threads = o.runs;
+    }
+
+    rp_sim_cfg_t cfg;
+    rp_sim_default_cfg(&cfg);
+    cfg.focal_px = o.focal_px;
+    cfg.noise_px = o.noise_px;
+    cfg.n_frames = o.frames;
+    run_result_t *res = calloc((size_t)o.n_methods * o.runs, sizeof *res);
+    double *scratch = malloc((size_t)o.runs * sizeof *scratch);
+    summary_t *sum = calloc(o.n_methods, sizeof *sum);
+    if (!res || !scratch || !sum) {
+        fprintf(stderr, "rigpose-sim: out of memory\n");
+        return 1;
+    }
+    int rc = 0;
+    if (o.layout_study) {
+        rc = layout_study(&o, &cfg, res);
+    } else {
+        const unsigned used = run_experiment(&o, &cfg, res);
+        if (used == 0) {
+            rc = 1;
+        } else {
+            o.threads = used;
+            for (unsigned m = 0; m < o.n_methods; ++m) {
+                summarise(&o, &res[(size_t)m * o.runs], scratch, &sum[m]);
+            }
+            if (o.json) {
+                print_json(&o, sum);
+            } else {
+                print_table(&o, &cfg, sum);
+            }
+        }
     }
     free(sum);
     free(scratch);
-    free(job.res);
-    return 0;
+    free(res);
+    return rc;
 }

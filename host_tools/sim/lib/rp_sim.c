@@ -139,23 +139,54 @@ void rp_sim_default_cfg(rp_sim_cfg_t *cfg)
     cfg->min_depth = 0.05;
     cfg->frame_dt = 1.0 / 30.0;
     cfg->n_frames = 100;
+    cfg->cam2 = rp_sim_paper_place(1);
+    cfg->cam4 = rp_sim_paper_place(0);
+}
+
+rp_sim_place_t rp_sim_paper_place(int right)
+{
+    const double s = 0.05 * sqrt(3.0);
+    rp_sim_place_t p = {{right ? s : -s, 0.0, -0.05}, right ? 0.5 * SIM_PI : -0.5 * SIM_PI};
+    return p;
+}
+
+/* cos/sin snapped to 0 and +-1 near multiples of 90 degrees, so that the paper's placements
+ * give exactly the rotations of the protocol. */
+static double snap_unit(double v)
+{
+    if (fabs(v) < 1e-12) {
+        return 0.0;
+    }
+    if (fabs(fabs(v) - 1.0) < 1e-12) {
+        return v > 0.0 ? 1.0 : -1.0;
+    }
+    return v;
+}
+
+/* Camera-to-cam1 rotation of a placement: Ry(yaw) (columns: the camera's axes in cam1's
+ * frame; y stays down). */
+static void place_rotation(const rp_sim_place_t *p, double R[9])
+{
+    const double c = snap_unit(cos(p->yaw)), s = snap_unit(sin(p->yaw));
+    const double Ry[9] = {c, 0, s, 0, 1, 0, -s, 0, c};
+    memcpy(R, Ry, sizeof Ry);
 }
 
 void rp_sim_make_rig(const rp_sim_cfg_t *cfg, rp_rig_t *rig)
 {
     /* Camera-to-cam1 rotations (columns: the camera's x, y, z axes in cam1's frame). All
-     * cameras keep y down; cam2 = Ry(+90 deg), cam3 = Ry(180 deg), cam4 = Ry(-90 deg). */
+     * cameras keep y down; cam3 = Ry(180 deg); cam2 and cam4 as placed (the paper: Ry(+90 deg)
+     * and Ry(-90 deg)). */
     static const double R_fwd[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
     static const double R_back[9] = {-1, 0, 0, 0, 1, 0, 0, 0, -1};
-    static const double R_right[9] = {0, 0, 1, 0, 1, 0, -1, 0, 0};
-    static const double R_left[9] = {0, 0, -1, 0, 1, 0, 1, 0, 0};
-    /* The protocol's 0.0866 is 0.1 cos(30 deg): exact, so every camera is 0.1 m from cam1. */
-    const double s = 0.05 * sqrt(3.0);
+    double R_cam2[9], R_cam4[9];
+    place_rotation(&cfg->cam2, R_cam2);
+    place_rotation(&cfg->cam4, R_cam4);
     const struct { const double *R; double D[3]; } geo[RP_SIM_NCAMS] = {
         [RP_SIM_CAM1] = {R_fwd, {0.0, 0.0, 0.0}},
-        [RP_SIM_CAM2] = {R_right, {s, 0.0, -0.05}},
+        [RP_SIM_CAM2] = {R_cam2, {cfg->cam2.D[0], cfg->cam2.D[1], cfg->cam2.D[2]}},
         [RP_SIM_CAM3] = {R_back, {0.0, 0.0, -0.1}},
-        [RP_SIM_CAM4] = {R_left, {-s, 0.0, -0.05}},
+        [RP_SIM_CAM4] = {R_cam4, {cfg->cam4.D[0], cfg->cam4.D[1], cfg->cam4.D[2]}},
         [RP_SIM_CAM1B] = {R_fwd, {0.1, 0.0, 0.0}},
         [RP_SIM_CAM3B] = {R_back, {0.1, 0.0, -0.1}},
     };

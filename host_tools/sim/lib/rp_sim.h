@@ -15,6 +15,8 @@
  * frame: R_j = R_{j-1} Rz(dg) Ry(db) Rx(da). A point is visible to a camera when it is at
  * least min_depth in front and projects inside the image. Pixel noise: Gaussian, noise_px.
  * Everything is a function of (seed, run index): runs can be computed in any order.
+ * cam2's and cam4's placements (position and yaw) are configurable (cfg.cam2, cfg.cam4) for
+ * the layout study (rp_sim_layout.h); the defaults are the paper's, above.
  */
 #ifndef RP_SIM_H
 #define RP_SIM_H
@@ -31,6 +33,13 @@ extern "C" {
 enum { RP_SIM_CAM1 = 0, RP_SIM_CAM2, RP_SIM_CAM3, RP_SIM_CAM4, RP_SIM_CAM1B, RP_SIM_CAM3B,
        RP_SIM_NCAMS };
 
+/* Where a sideways camera sits on the rig: position in cam1's frame and a yaw about cam1's y
+ * axis (down). yaw 0 looks forward (+z), +pi/2 right (+x), -pi/2 left, pi back. */
+typedef struct {
+    double D[3];           /* m, cam1's frame (x right, y down, z forward) */
+    double yaw;            /* rad */
+} rp_sim_place_t;
+
 typedef struct {
     uint32_t n_points;     /* 10000 */
     double r_in, r_out;    /* 0.667, 1.0 m */
@@ -42,12 +51,18 @@ typedef struct {
     double min_depth;      /* 0.05 m */
     double frame_dt;       /* 1/30 s (timestamps only) */
     uint32_t n_frames;     /* 100 */
+    rp_sim_place_t cam2;   /* (+0.0866, 0, -0.05), yaw +pi/2 (the paper's) */
+    rp_sim_place_t cam4;   /* (-0.0866, 0, -0.05), yaw -pi/2 (the paper's) */
 } rp_sim_cfg_t;
 
 void rp_sim_default_cfg(rp_sim_cfg_t *cfg);
 
-/* The six-camera rig of the protocol. */
+/* The six-camera rig of the protocol, cam2 and cam4 where cfg places them. */
 void rp_sim_make_rig(const rp_sim_cfg_t *cfg, rp_rig_t *rig);
+
+/* The paper's placement of cam2 (right = 1) or cam4 (right = 0); 0.0866 is exactly
+ * 0.1 cos(30 deg), so every camera is 0.1 m from cam1. */
+rp_sim_place_t rp_sim_paper_place(int right);
 
 typedef struct {
     rp_sim_cfg_t cfg;
