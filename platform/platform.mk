@@ -8,7 +8,8 @@
 #   $(BUILD)/vm/vivid_capture                static capture program run inside the VM
 #   $(BUILD)/vm/run_vivid_test               tests/vm/vivid_test.sh with this build's paths:
 #                                            boots a Debian kernel under qemu, loads vivid with
-#                                            4 devices and captures from all of them (make test)
+#                                            4 devices, captures from all of them, then runs the
+#                                            daemon on them (make test; make vm-test alone)
 # Link a program with the HAL: $(BUILD)/platform/librigpose_hal.a $(REL)/librigpose_sim.a
 # $(REL)/librigpose_core.a $(HAL_LIBS) -lstdc++ -lm.
 
@@ -49,10 +50,14 @@ $(VIVID_CAPTURE): tests/vm/vivid_capture.c $(HAL_LIB) $(REL)/librigpose_sim.a $(
 	@mkdir -p $(@D)
 	$(CC) $(CSTD) $(WARN) -D_DEFAULT_SOURCE $(HAL_INC) -O2 -g $(VDEF_double-eigen) $< $(HAL_LIB) \
 	    $(REL)/librigpose_sim.a $(REL)/librigpose_core.a -o $@ -static $(HAL_LIBS) -lstdc++ -lm
-$(VM)/run_vivid_test: tests/vm/vivid_test.sh $(VIVID_CAPTURE)
+# The daemon (daemon/daemon.mk: $(REL)/rigpose, dynamic; its libraries go into the initramfs)
+# also runs in the VM on the four vivid cameras (tests/vm/vivid_rig.yaml), once it exists.
+VM_DAEMON := $(if $(wildcard daemon/rigpose.c),$(REL)/rigpose)
+VM_DAEMON_ARGS := $(if $(VM_DAEMON),"$(abspath $(VM_DAEMON))" "$(CURDIR)/tests/vm/vivid_rig.yaml")
+$(VM)/run_vivid_test: tests/vm/vivid_test.sh tests/vm/vivid_rig.yaml $(VIVID_CAPTURE) $(VM_DAEMON)
 	@mkdir -p $(@D)
-	printf '#!/bin/sh\nexec %s/tests/vm/vivid_test.sh %s %s "$$@"\n' "$(CURDIR)" \
-	    "$(abspath $(VM))" "$(abspath $(VIVID_CAPTURE))" > $@
+	printf '#!/bin/sh\nexec %s/tests/vm/vivid_test.sh %s %s %s "$$@"\n' "$(CURDIR)" \
+	    "$(abspath $(VM))" "$(abspath $(VIVID_CAPTURE))" '$(VM_DAEMON_ARGS)' > $@
 	chmod +x $@
 
 hal: $(HAL_LIB)

@@ -2,18 +2,30 @@
  * vivid_capture.c - runs inside the test VM (tests/vm/vivid_test.sh), linked static: captures
  * frame sets from several V4L2 devices at once through the HAL's v4l2 source and checks them.
  *
- *   vivid_capture [--sets N] [--size WxH] [--fps F] [--tol-ms T] DEVICE...
+ *   vivid_capture [--sets N] [--size WxH] [--fps F] [--tol-ms T] [--drop-perc CAM:P]
+ *                 [--disconnect CAM:SET] DEVICE...
  *
  * Checks every set: all cameras present at the asked size, their kernel timestamps within the
  * tolerance of each other and near CLOCK_MONOTONIC now (at most 1 s old, at most two frame
  * periods ahead: vivid stamps the end of the frame period), set and camera times strictly
- * increasing, images not blank. Prints one `key=value` line per figure, then `PASS` or
- * `FAIL: reason`; exit 0 only on PASS.
+ * increasing, images not blank. Faults through vivid's own error-injection controls:
+ * --drop-perc makes the driver skip P % of camera CAM's frames (its drop count must grow);
+ * --disconnect unplugs camera CAM (vivid's "Disconnect" button) before set SET: the next sets
+ * must come without it, flagged GONE | MISSING, with the other cameras present, until the HAL's
+ * retry (every retry_ms = 500 ms) has reopened it (vivid re-registers the device once closed);
+ * it must be back before the last set.
+ * Prints one `key=value` line per figure, then `PASS` or `FAIL: reason`; exit 0 only on PASS.
  */
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
 
+#include <linux/videodev2.h>
+
+#include <stdint.h>
 #include <sys/resource.h>
 
 #include "rigpose/rp_hal.h"
@@ -25,8 +37,36 @@ static int fail(const char *what, unsigned set)
     return 1;
 }
 
+/* Sets the control called name (found by enumeration: vivid's private ids are not in the uapi
+ * headers) on device dev. 0 on success. */
+static int set_ctrl(const char *dev, const char *name, int value)
+{
+    const int fd = open(dev, O_RDWR | O_NONBLOCK);
+    if (fd < 0) {
+        return -1;
+    }
+    struct v4l2_queryctrl q;
+    memset(&q, 0, sizeof q);
+    q.id = V4L2_CTRL_FLAG_NEXT_CTRL;
+    int rc = -1;
+    while (ioctl(fd, VIDIOC_QUERYCTRL, &q) == 0) {
+        if (strcmp((const char *)q.name, name) == 0) {
+            struct v4l2_control c;
+            c.id = q.id;
+            c.value = value;
+            rc = ioctl(fd, VIDIOC_S_CTRL, &c);
+            break;
+        }
+        q.id |= V4L2_CTRL_FLAG_NEXT_CTRL;
+    }
+    close(fd);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
+    int drop_cam = -1, drop_perc = 0, disc_cam = -1;
+    unsigned disc_set = 0;
     unsigned n_sets = 50, w = 640, h = 480, fps = 25, tol_ms = 40;
     rp_hal_cfg_t cfg;
     memset(&cfg, 0, sizeof cfg);
@@ -42,6 +82,14 @@ int main(int argc, char **argv)
             fps = (unsigned)atoi(argv[++a]);
         } else if (strcmp(argv[a], "--tol-ms") == 0 && a + 1 < argc) {
             tol_ms = (unsigned)atoi(argv[++a]);
+        } else if (strcmp(argv[a], "--drop-perc") == 0 && a + 1 < argc) {
+            if (sscanf(argv[++a], "%d:%d", &drop_cam, &drop_perc) != 2) {
+                return fail("bad --drop-perc", 0);
+            }
+        } else if (strcmp(argv[a], "--disconnect") == 0 && a + 1 < argc) {
+            if (sscanf(argv[++a], "%d:%u", &disc_cam, &disc_set) != 2) {
+                return fail("bad --disconnect", 0);
+            }
         } else if (argv[a][0] != '-' && cfg.n_cams < RP_MAX_CAMS) {
             snprintf(cfg.cam[cfg.n_cams].device, RP_HAL_PATH_MAX, "%s", argv[a]);
             cfg.n_cams++;
@@ -51,6 +99,13 @@ int main(int argc, char **argv)
         }
     }
     const uint8_t n = cfg.n_cams;
+    if (drop_cam >= n || disc_cam >= n || (disc_cam >= 0 && disc_cam == drop_cam)) {
+        return fail("fault camera out of range", 0);
+    }
+    if (drop_cam >= 0 && set_ctrl(cfg.cam[drop_cam].device, "Percentage of Dropped Buffers",
+                                  drop_perc) != 0) {
+        return fail("cannot set vivid's 'Percentage of Dropped Buffers'", 0);
+    }
     for (uint8_t i = 0; i < n; i++) {
         cfg.cam[i].w = (uint16_t)w;
         cfg.cam[i].h = (uint16_t)h;
@@ -82,7 +137,16 @@ int main(int argc, char **argv)
     unsigned timeouts = 0, got = 0, dropped_sets = 0;
     rp_hal_set_t set;
     int rc = 0;
+    uint32_t drops_before = 0;
+    unsigned gone_sets = 0, back_set = 0;
     while (got < n_sets && rc == 0) {
+        if (disc_cam >= 0 && got == disc_set && gone_sets == 0) {
+            if (set_ctrl(cfg.cam[disc_cam].device, "Disconnect", 0) != 0) {
+                rc = fail("cannot press vivid's 'Disconnect'", got);
+                break;
+            }
+            printf("disconnected cam%d before set %u\n", disc_cam, got);
+        }
         st = rp_hal_grab(src, &set);
         const int64_t now = rp_hal_now_us();
         if (st == RP_HAL_E_TIMEOUT) {
@@ -105,9 +169,35 @@ int main(int argc, char **argv)
             rc = fail("set time not increasing", got);
             break;
         }
-        int64_t lo = set.cam[0].utime, hi = set.cam[0].utime;
+        /* The unplugged camera: GONE | MISSING from the first set after the disconnect until
+         * the HAL's retry reopens it (vivid registers the device again once its last user has
+         * closed it, like a camera plugged back in), then present again. */
+        int gone_now = 0;
+        if (disc_cam >= 0 && got >= disc_set) {
+            const rp_hal_frame_t *f = &set.cam[disc_cam];
+            const int gone = f->flags == (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE) &&
+                             f->img.data == NULL;
+            if (gone && back_set == 0) {
+                gone_sets++;
+                gone_now = 1;
+            } else if (!gone && gone_sets > 0 && back_set == 0) {
+                back_set = got;
+                printf("cam%d back in set %u after %u sets without it\n", disc_cam, got,
+                       gone_sets);
+            } else if (!gone && gone_sets == 0) {
+                rc = fail("unplugged camera still in the set", got);
+                break;
+            } else if (gone) {
+                rc = fail("camera gone again after coming back", got);
+                break;
+            }
+        }
+        int64_t lo = INT64_MAX, hi = INT64_MIN;
         for (uint8_t i = 0; i < n && rc == 0; i++) {
             const rp_hal_frame_t *f = &set.cam[i];
+            if (gone_now && i == disc_cam) {
+                continue;
+            }
             if (f->flags & (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE)) {
                 rc = fail("camera missing from a set", got);
                 break;
@@ -157,6 +247,9 @@ int main(int argc, char **argv)
         if (got == 0) {
             first_set = set.utime;
         }
+        if (drop_cam >= 0 && got == 0) {
+            drops_before = set.cam[drop_cam].drops;
+        }
         last_set = set.utime;
         got++;
     }
@@ -177,6 +270,26 @@ int main(int argc, char **argv)
                (unsigned)set.cam[i].drops);
     }
     printf("camera_frames_flagged_dropped=%u\n", dropped_sets);
+    if (rc == 0 && drop_cam >= 0) {
+        const uint32_t d = set.cam[drop_cam].drops - drops_before;
+        uint32_t other = 0; /* the busiest other camera's own (load) drops */
+        for (uint8_t i = 0; i < n; i++) {
+            other = (int)i != drop_cam && set.cam[i].drops > other ? set.cam[i].drops : other;
+        }
+        printf("injected_drops cam%d perc=%d counted=%u (other cameras at most %u)\n", drop_cam,
+               drop_perc, (unsigned)d, (unsigned)other);
+        if (drop_perc >= 20 && d <= other) {
+            rc = fail("vivid dropped frames but the HAL counted no more than on other cameras",
+                      got);
+        }
+    }
+    if (rc == 0 && disc_cam >= 0) {
+        printf("unplugged cam%d: %u sets without it, back in set %u\n", disc_cam, gone_sets,
+               back_set);
+        if (gone_sets == 0 || back_set == 0) {
+            rc = fail("the unplugged camera was not reported GONE, or never came back", got);
+        }
+    }
     (void)rp_hal_stop(src);
     rp_hal_close(src);
     if (rc == 0) {

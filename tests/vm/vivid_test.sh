@@ -1,15 +1,19 @@
 #!/usr/bin/env bash
 # tests/vm/vivid_test.sh - the V4L2 source against a real kernel driver: boots Debian's kernel
 # under qemu with a small initramfs, loads vivid with 4 capture devices and runs the static
-# capture program on all four at once (and the daemon, if given); results come back over the
-# second serial port. The exit code is the test result (0 pass, 1 fail, 2 cannot run).
+# capture program on all four at once, then the daemon (if given), then the capture again with
+# faults injected through vivid's controls (dropped frames, a camera unplugged mid-run and back); results
+# come back over the second serial port. The exit code is the test result (0 pass, 1 fail, 2 cannot run).
 #
 #   tests/vm/vivid_test.sh VMDIR CAPTURE [DAEMON CONFIG]
 #
 # VMDIR    cache and work folder ($(BUILD)/vm): the kernel package (downloaded once with
 #          `apt-get download`, never installed), the unpacked kernel and media modules
 # CAPTURE  static vivid_capture (tests/vm/vivid_capture.c)
-# DAEMON   optional static daemon, run as `DAEMON --config CONFIG --frames N` in the guest
+# DAEMON   optional daemon, run as `DAEMON --config CONFIG --frames 15` in the guest after the
+#          capture; static, or dynamic with its shared libraries (from ldd) copied into the
+#          initramfs (Debian ships no static liblcm). CONFIG should publish to a file:// log
+#          under /tmp; the test checks the daemon's exit code and that the log is not empty.
 # Needs: qemu-system-x86_64, busybox (static), xz, dpkg-deb, apt-get (scripts/install-deps.sh);
 # no root. Environment: RP_VM_SETS (frame sets to capture, 50), RP_VM_TIMEOUT (s, 300).
 set -u
@@ -84,8 +88,14 @@ done
 DAEMON_CMD=""
 if [ -n "$DAEMON" ]; then
   [ -x "$DAEMON" ] || cant "daemon $DAEMON not built"
+  [ -f "$DCONFIG" ] || cant "daemon configuration $DCONFIG missing"
   cp "$DAEMON" "$R/bin/rigpose"
   cp "$DCONFIG" "$R/etc/rig.yaml"
+  # Shared libraries at their host paths (the loader included), if the daemon is dynamic.
+  for lib in $(ldd "$DAEMON" 2>/dev/null | grep -oE '/[^ ]+\.so[^ ]*'); do
+    mkdir -p "$R$(dirname "$lib")"
+    cp -L "$lib" "$R$lib"
+  done
   DAEMON_CMD="run_daemon"
 fi
 cat > "$R/init" <<INIT
@@ -102,11 +112,15 @@ echo "guest: devices \$(ls /dev/video* | tr '\n' ' ')" > \$out
 /bin/vivid_capture --sets $SETS /dev/video0 /dev/video1 /dev/video2 /dev/video3 > \$out 2>&1
 echo "capture_exit=\$?" > \$out
 run_daemon() {
-  cd /tmp && /bin/rigpose --config /etc/rig.yaml --frames 30 > /tmp/daemon.log 2>&1
+  cd /tmp && /bin/rigpose --config /etc/rig.yaml --frames 15 > /tmp/daemon.log 2>&1
   echo "daemon_exit=\$?" > \$out
-  tail -n 20 /tmp/daemon.log > \$out
+  tail -n 8 /tmp/daemon.log > \$out
+  echo "daemon_lcm_log_bytes=\$(wc -c < /tmp/rigpose.lcmlog 2>/dev/null || echo 0)" > \$out
 }
 $DAEMON_CMD
+echo "guest: faults: 50 % of cam1's frames dropped by the driver, cam3 unplugged before set 20 and plugged back" > \$out
+/bin/vivid_capture --sets 60 --drop-perc 1:50 --disconnect 3:20 /dev/video0 /dev/video1 /dev/video2 /dev/video3 > \$out 2>&1
+echo "fault_exit=\$?" > \$out
 echo "guest: done" > \$out
 poweroff -f
 INIT
@@ -138,8 +152,12 @@ grep -qx 'guest: done' "$WORK/results.txt" || {
   tail -n 20 "$WORK/console.log" | tr -d '\r' | sed 's/^/  console| /'; die "the guest did not finish its script"; }
 grep -qx 'capture_exit=0' "$WORK/results.txt" && grep -qx 'PASS' "$WORK/results.txt" \
     || die "capture inside the VM failed (see the guest lines above)"
+grep -qx 'fault_exit=0' "$WORK/results.txt" \
+    || die "capture with injected drops and an unplugged camera failed (see the guest lines above)"
 if [ -n "$DAEMON" ]; then
   grep -qx 'daemon_exit=0' "$WORK/results.txt" || die "the daemon inside the VM failed"
+  bytes=$(sed -n 's/^daemon_lcm_log_bytes=//p' "$WORK/results.txt")
+  [ "${bytes:-0}" -gt 0 ] || die "the daemon inside the VM published nothing (empty LCM log)"
 fi
 say "PASS"
 exit 0
