@@ -20,7 +20,7 @@ $(eval $(call CORE_LIB,realdata,$(RD_DIR),$(CC),$(CXX),-O2 -g -DNDEBUG $(RD_DEFS
 # Recursively expanded: pkg-config runs when the recipe runs, after `deps` installed OpenCV.
 RD_CXXFLAGS = -std=c++17 -O2 -g -DNDEBUG $(RD_DEFS) $(WARN) \
     $(patsubst -I%,-isystem %,$(shell pkg-config --cflags opencv4)) $(INC) -Ihost_tools/realdata
-RD_LIBS = -lopencv_imgcodecs -lopencv_core -lm
+RD_LIBS = -lopencv_calib3d -lopencv_video -lopencv_imgproc -lopencv_imgcodecs -lopencv_core -lm
 RD_SRC := host_tools/realdata/rigpose_realdata.cpp host_tools/realdata/rp_realdata.cpp
 RD_HDR := $(wildcard host_tools/realdata/*.hpp core/include/rigpose/*.h)
 
@@ -43,7 +43,7 @@ BENCH_PARTS += $(BUILD)/bench/realdata.json
 $(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
 	@mkdir -p $(BUILD)/bench
 	@if [ -d "$(RD_DATA)/kitti00_000-099" ] && [ -d "$(RD_DATA)/euroc_mh01_000-149" ]; then \
-	  $(RD_BIN) --kitti $(RD_DATA)/kitti00_000-099 --frames $(RD_BENCH_KITTI) --quiet \
+	  $(RD_BIN) --kitti $(RD_DATA)/kitti00_000-099 --frames $(RD_BENCH_KITTI) --quiet --opencv-ref \
 	      --json-out $(RD_DIR)/kitti00.json && \
 	  $(RD_BIN) --euroc $(RD_DATA)/euroc_mh01_000-149 --frames $(RD_BENCH_EUROC) --quiet \
 	      --json-out $(RD_DIR)/euroc_mh01.json && \

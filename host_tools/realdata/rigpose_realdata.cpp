@@ -28,7 +28,10 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
 
 #include "rigpose/rp_pipe.h"
 #include "rp_realdata.hpp"
@@ -269,6 +272,65 @@ bool write_replay(const std::string &out, const rprd::Sequence &seq, const Profi
     return ok;
 }
 
+/* A yardstick that does not use rigpose: plain OpenCV frame-to-frame stereo odometry on a
+ * rectified pair (KITTI). Per frame j: goodFeaturesToTrack in the left image (500, quality
+ * 0.01, 10 px), pyramidal LK into the right image (depth from the disparity, rows within 1 px)
+ * and into the next left image, solvePnPRansac (1 px), chained. Its trajectory tells how far
+ * the ground truth itself is from what the images show. Returns false if a step fails. */
+bool opencv_reference(const rprd::Sequence &seq, std::vector<rprd::Pose> *traj)
+{
+    const rp_camera_t &c = seq.rig.cam[0].cam;
+    const double b = (double)seq.rig.cam[1].D[0];
+    const cv::Mat K = (cv::Mat_<double>(3, 3) << (double)c.fx, 0, (double)c.cx, 0, (double)c.fy,
+                       (double)c.cy, 0, 0, 1);
+    traj->assign(1, rprd::Pose());
+    for (size_t j = 0; j + 1 < seq.utime.size(); ++j) {
+        const cv::Mat L = cv::imread(seq.img[0][j], cv::IMREAD_GRAYSCALE);
+        const cv::Mat R = cv::imread(seq.img[1][j], cv::IMREAD_GRAYSCALE);
+        const cv::Mat N = cv::imread(seq.img[0][j + 1], cv::IMREAD_GRAYSCALE);
+        if (L.empty() || R.empty() || N.empty()) {
+            return false;
+        }
+        std::vector<cv::Point2f> a, r, n;
+        std::vector<uchar> sr, sn;
+        std::vector<float> e;
+        cv::goodFeaturesToTrack(L, a, 500, 0.01, 10);
+        if (a.size() < 6) {
+            return false;
+        }
+        cv::calcOpticalFlowPyrLK(L, R, a, r, sr, e, cv::Size(21, 21), 3);
+        cv::calcOpticalFlowPyrLK(L, N, a, n, sn, e, cv::Size(21, 21), 3);
+        std::vector<cv::Point3f> obj;
+        std::vector<cv::Point2f> img;
+        for (size_t i = 0; i < a.size(); ++i) {
+            const double d = (double)(a[i].x - r[i].x);
+            if (!sr[i] || !sn[i] || d < 1.0 || std::fabs(a[i].y - r[i].y) > 1.0f) {
+                continue;
+            }
+            const double z = (double)c.fx * b / d;
+            obj.emplace_back((float)(((double)a[i].x - (double)c.cx) * z / (double)c.fx),
+                             (float)(((double)a[i].y - (double)c.cy) * z / (double)c.fy),
+                             (float)z);
+            img.push_back(n[i]);
+        }
+        cv::Mat rv, tv, Rm;
+        if (obj.size() < 6 ||
+            !cv::solvePnPRansac(obj, img, K, cv::noArray(), rv, tv, false, 300, 1.0f, 0.999)) {
+            return false;
+        }
+        cv::Rodrigues(rv, Rm);
+        rprd::Pose T; /* points of frame j's camera into frame j+1's */
+        for (int i = 0; i < 9; ++i) {
+            T.R[i] = Rm.at<double>(i / 3, i % 3);
+        }
+        for (int i = 0; i < 3; ++i) {
+            T.t[i] = tv.at<double>(i);
+        }
+        traj->push_back(rprd::pose_mul(traj->back(), rprd::pose_inv(T)));
+    }
+    return true;
+}
+
 void usage(FILE *f)
 {
     std::fprintf(
@@ -288,6 +350,8 @@ void usage(FILE *f)
         "  --replay-out DIR     write a replay folder (frames.csv, truth.csv, rig.yaml); image\n"
         "                       paths relative to DIR, or copies with --copy-images\n"
         "  --no-run             only load (and write the replay folder)\n"
+        "  --opencv-ref         also run plain OpenCV stereo odometry (rectified pairs only)\n"
+        "                       as a yardstick of the ground truth\n"
         "profile overrides: --q-trans Q --q-rot Q --sigma-px S --features N --levels L --win W\n"
         "  --min-dist D --grid X,Y --max-depth M --match-depth MIN,MAX --match-win H\n"
         "  --match-zncc Z --min-tracked N --refine 0|1 --iterations N --gate CHI2\n");
@@ -299,7 +363,7 @@ int main(int argc, char **argv)
 {
     std::string kitti, euroc, name, json_out, replay_out;
     size_t frames = 0, first = 0;
-    bool quiet = false, copy_images = false, no_run = false;
+    bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
     double check_m = -1.0, check_pct = -1.0;
     std::vector<std::pair<std::string, std::string>> over;
     for (int i = 1; i < argc; ++i) {
@@ -314,6 +378,8 @@ int main(int argc, char **argv)
             copy_images = true;
         } else if (a == "--no-run") {
             no_run = true;
+        } else if (a == "--opencv-ref") {
+            opencv_ref = true;
         } else if (!has_val) {
             std::fprintf(stderr, "rigpose-realdata: %s: unknown option or missing value\n",
                          a.c_str());
@@ -492,6 +558,19 @@ int main(int argc, char **argv)
     std::printf("| frame-to-frame drift (RPE / path) | %.3f %% |\n", s.rpe_percent);
     std::printf("| frames lost / re-initialised | %zu / %zu |\n", lost, reinit);
     std::printf("| pipeline time per frame set | %.2f ms |\n", ms);
+    rprd::Summary ref;
+    const bool rectified = is_kitti;
+    if (opencv_ref && rectified) {
+        std::vector<rprd::Pose> traj;
+        if (opencv_reference(seq, &traj)) {
+            ref = rprd::summarise(traj, seq.truth);
+            std::printf("| yardstick: OpenCV frame-to-frame stereo PnP, ATE / path | %.3f %% "
+                        "(%.4f m) |\n| yardstick: its RPE / path | %.3f %% |\n",
+                        ref.ate_percent, ref.ate_m, ref.rpe_percent);
+        } else {
+            std::printf("yardstick: OpenCV stereo odometry failed\n");
+        }
+    }
     if (!json_out.empty()) {
         FILE *f = std::fopen(json_out.c_str(), "w");
         if (!f) {
@@ -502,9 +581,16 @@ int main(int argc, char **argv)
         std::fprintf(f,
                      "{\"%s_ate_m\": %.6f, \"%s_ate_percent\": %.6f, \"%s_path_m\": %.4f, "
                      "\"%s_max_err_m\": %.6f, \"%s_rot_rmse_deg\": %.5f, \"%s_rpe_percent\": %.5f, \"%s_frames\": %zu, "
-                     "\"%s_frames_lost\": %zu, \"%s_ms_per_frame\": %.3f}\n",
+                     "\"%s_frames_lost\": %zu, \"%s_ms_per_frame\": %.3f",
                      n, s.ate_m, n, s.ate_percent, n, s.path_m, n, s.max_m, n, s.rot_rmse_deg, n, s.rpe_percent, n,
                      s.frames, n, lost, n, ms);
+        if (ref.frames) {
+            std::fprintf(f,
+                         ", \"%s_opencv_ref_ate_percent\": %.6f, \"%s_opencv_ref_rpe_percent\": "
+                         "%.5f",
+                         n, ref.ate_percent, n, ref.rpe_percent);
+        }
+        std::fprintf(f, "}\n");
         std::fclose(f);
     }
     int rc = 0;
