@@ -2,8 +2,9 @@
 # (KITTI 00, EuRoC MH01 in ../shared/data; included by the top-level Makefile).
 #
 #   make $(REL)/rigpose-realdata   the program
-#   make test                      host_tools/realdata/test_realdata.sh: 20 frames of each
-#                                  sequence within the targets (skipped if the data is absent)
+#   make test                      test_realdata_conv (conversions, scoring, loaders) and
+#                                  test_realdata.sh: 20 frames of each sequence within the
+#                                  targets (both skip the data's part if it is absent)
 #   make bench                     $(BUILD)/bench/realdata.json: kitti00_ate_percent,
 #                                  euroc_mh01_ate_m, ... (QUICK=1: 40 frames of each)
 #
@@ -33,8 +34,15 @@ EXTRA_TOOLS += $(RD_BIN)
 # The data: ../shared/data beside the repository, or $RIGPOSE_DATA.
 RD_DATA = $(or $(RIGPOSE_DATA),$(abspath $(CURDIR)/../shared/data))
 
-HOST_EXTRA_TESTS += host_tools/realdata/test_realdata.sh
-test: $(RD_BIN)
+# Conversions, scoring and loaders (host_tools/realdata/test_realdata_conv.cpp).
+RD_TEST := $(RD_DIR)/test_realdata_conv
+$(RD_TEST): host_tools/realdata/test_realdata_conv.cpp host_tools/realdata/rp_realdata.cpp \
+            $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
+	$(CXX) $(RD_CXXFLAGS) $< host_tools/realdata/rp_realdata.cpp $(RD_DIR)/librigpose_core.a \
+	    -o $@ $(RD_LIBS)
+
+HOST_EXTRA_TESTS += $(RD_TEST) host_tools/realdata/test_realdata.sh
+test: $(RD_BIN) $(RD_TEST)
 export RP_REALDATA_BIN = $(RD_BIN)
 
 RD_BENCH_KITTI ?= $(if $(filter 1,$(QUICK)),40,100)
