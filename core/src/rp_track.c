@@ -5,33 +5,28 @@
  * the previous image, Q14 bilinear weights, intensities in Q5, the 2x2 normal equations solved per
  * iteration; here the sums are exact int64 and the solve is integer.
  */
+#include <math.h>
 #include <string.h>
 
 #include "priv/rp_math.h"
 #include "rigpose/rp_track.h"
 
 #define Q16 65536
-#define W_BITS 14 /* bilinear weights, Q14 */
 
 /* ---- small integer helpers ------------------------------------------------------------------ */
 
-/* floor(sqrt(x)) for any uint64. */
-static uint64_t isqrt64(uint64_t x)
+/* floor(sqrt(x)) for x < 2^52: the FPU's square root of x (exact in a double, correctly rounded
+ * by IEEE 754) truncated, then corrected by one step. One hardware instruction instead of a bit
+ * loop; the result is the same integer on every IEEE platform. */
+static uint32_t isqrt52(uint64_t x)
 {
-    uint64_t r = 0, bit = (uint64_t)1 << 62;
-    while (bit > x) {
-        bit >>= 2;
+    uint64_t r = (uint64_t)sqrt((double)x);
+    if (r * r > x) {
+        --r;
+    } else if ((r + 1) * (r + 1) <= x) {
+        ++r;
     }
-    while (bit != 0) {
-        if (x >= r + bit) {
-            x -= r + bit;
-            r = (r >> 1) + bit;
-        } else {
-            r >>= 1;
-        }
-        bit >>= 2;
-    }
-    return r;
+    return (uint32_t)r;
 }
 
 static int64_t iabs64(int64_t x) { return x < 0 ? -x : x; }
@@ -185,50 +180,242 @@ rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg)
 
 /* ---- Lucas-Kanade --------------------------------------------------------------------------- */
 
-/* Raw pixel with replicated border. */
-static int px_at(const uint8_t *p, int w, int h, int x, int y)
+/* Q7 bilinear weights of the fractional part (Q16) of a position: rounded, summing to exactly
+ * 128, so that 8-bit grey levels interpolate in int16 lanes (255 * 128 = 32640 < 2^15). Used
+ * for J, sampled at every iteration; positions resolve to 1/128 px there (the estimate itself
+ * stays Q16). */
+static void weights_q7(int32_t fx_q16, int32_t fy_q16, int16_t w[4])
 {
-    return p[(size_t)clampi(y, 0, h - 1) * w + clampi(x, 0, w - 1)];
+    const int32_t a = (fx_q16 + (1 << 8)) >> 9, b = (fy_q16 + (1 << 8)) >> 9; /* Q7, 0..128 */
+    w[0] = (int16_t)(((128 - a) * (128 - b) + 64) >> 7);
+    w[1] = (int16_t)((a * (128 - b) + 64) >> 7);
+    w[2] = (int16_t)(((128 - a) * b + 64) >> 7);
+    w[3] = (int16_t)(128 - w[0] - w[1] - w[2]);
 }
 
-/* Q14 bilinear weights of the fractional part (Q16) of a position, as OpenCV: rounded, summing
- * to exactly 2^14. */
-static void weights_q14(int32_t fx_q16, int32_t fy_q16, int32_t w[4])
+/* Window rows are padded to a multiple of 8 pixels so that every inner loop below runs over whole
+ * blocks of 8 (fixed trip count: the compiler turns them into SIMD at -O2, e.g. pmaddwd / smlal;
+ * the same C is the scalar code elsewhere). Padded columns carry zero gradients, so they add
+ * nothing to the sums. */
+#define WPAD(n) (((n) + 7) & ~7)
+#define WP_MAX WPAD(RP_TRACK_MAX_WIN)
+#define PATCH_MAX (RP_TRACK_MAX_WIN * WP_MAX)
+#define GS_MAX (WP_MAX + 8)                          /* row stride of the gradient grid */
+#define GRID_MAX ((RP_TRACK_MAX_WIN + 2) * GS_MAX)
+#define CHUNK 64 /* int32 partial sums over at most 64 pixels: 64 x 8160 x 4080 < 2^31 */
+
+/* Sums of x^2, x y, y^2 over n (a multiple of 8) values, |x|, |y| <= 4080 (Scharr). */
+static void sum_sq3(const int16_t *restrict x, const int16_t *restrict y, int n, int64_t *sxx, int64_t *sxy,
+                    int64_t *syy)
 {
-    const int64_t a = fx_q16, b = fy_q16; /* Q16 in [0, 1) */
-    const int64_t one = Q16;
-    /* (Q16 * Q16) = Q32 -> Q14: >> 18, rounded */
-    w[0] = (int32_t)(((one - a) * (one - b) + (1 << 17)) >> 18);
-    w[1] = (int32_t)((a * (one - b) + (1 << 17)) >> 18);
-    w[2] = (int32_t)(((one - a) * b + (1 << 17)) >> 18);
-    w[3] = (1 << W_BITS) - w[0] - w[1] - w[2];
+    int64_t axx = 0, axy = 0, ayy = 0;
+    for (int c = 0; c < n; c += CHUNK) {
+        const int e = c + CHUNK < n ? c + CHUNK : n;
+        int32_t pxx = 0, pxy = 0, pyy = 0;
+        for (int k = c; k < e; k += 8) {
+            for (int i = 0; i < 8; ++i) {
+                pxx += x[k + i] * x[k + i];
+                pxy += x[k + i] * y[k + i];
+                pyy += y[k + i] * y[k + i];
+            }
+        }
+        axx += pxx;
+        axy += pxy;
+        ayy += pyy;
+    }
+    *sxx = axx;
+    *sxy = axy;
+    *syy = ayy;
 }
 
-#define PATCH_MAX (RP_TRACK_MAX_WIN * RP_TRACK_MAX_WIN)
-#define GRID_MAX ((RP_TRACK_MAX_WIN + 1) * (RP_TRACK_MAX_WIN + 1))
+/* Mismatch vector sum (J - I) Ix, sum (J - I) Iy over n (a multiple of 8) values; J, I in Q5
+ * ([0, 8160]), gradients |.| <= 4080. */
+static void sum_mismatch(const int16_t *restrict J, const int16_t *restrict I,
+                         const int16_t *restrict gx, const int16_t *restrict gy, int n, int64_t *b1, int64_t *b2)
+{
+    int64_t a1 = 0, a2 = 0;
+    for (int c = 0; c < n; c += CHUNK) {
+        const int e = c + CHUNK < n ? c + CHUNK : n;
+        int32_t p1 = 0, p2 = 0;
+        for (int k = c; k < e; k += 8) {
+            for (int i = 0; i < 8; ++i) {
+                const int16_t d = (int16_t)(J[k + i] - I[k + i]);
+                p1 += d * gx[k + i];
+                p2 += d * gy[k + i];
+            }
+        }
+        a1 += p1;
+        a2 += p2;
+    }
+    *b1 = a1;
+    *b2 = a2;
+}
 
-/* Tracks one point from level image pair (I, J) of pyramids pI, pJ. p_q16: level-0 position in
- * I; *q_q16: level-0 result in J. Returns 1 if tracked, 0 if lost (out of bounds, too little
- * texture, singular at level 0, residual above cfg.max_err_q5). */
-static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_t *pJ,
+/* Per-call scratch of lk_point (on the stack, about 15 kB at the default limits). */
+typedef struct {
+    int16_t Iv[PATCH_MAX], Ix[PATCH_MAX], Iy[PATCH_MAX]; /* I in Q5; its Scharr gradients */
+    int16_t Jv[PATCH_MAX];                               /* J in Q5 at the current estimate */
+    int16_t Jg[GRID_MAX];                                /* J's grey levels on the grid */
+    int16_t T[(RP_TRACK_MAX_WIN + 3) * (WP_MAX + 16)];  /* I's grey levels around the window */
+    int16_t Gg[GRID_MAX], Gx[GRID_MAX]; /* I interpolated at the patch, Q7 and Q3 */
+} lk_scratch_t;
+
+/* Widens n (a multiple of 8) grey levels to int16. */
+static void widen_row(const uint8_t *restrict r, int n, int16_t *restrict out)
+{
+    for (int x = 0; x < n; x += 8) {
+        for (int i = 0; i < 8; ++i) {
+            out[x + i] = r[x + i];
+        }
+    }
+}
+
+/* The nr x nc (nc a multiple of 8) tile of level image P (w x h) at (x0, y0), widened to int16
+ * at row stride ts, border replicated where it leaves the image. */
+static void load_tile(const uint8_t *P, int w, int h, int x0, int y0, int nr, int nc,
+                      int16_t *T, int ts)
+{
+    const int inside = x0 >= 0 && y0 >= 0 && x0 + nc <= w && y0 + nr <= h;
+    for (int y = 0; y < nr; ++y) {
+        int16_t *t = T + y * ts;
+        const uint8_t *row = P + (size_t)clampi(y0 + y, 0, h - 1) * w;
+        if (inside) {
+            widen_row(row + x0, nc, t);
+        } else {
+            const int a = clampi(-x0, 0, nc), b = clampi(w - x0, a, nc); /* [a, b) in the image */
+            for (int x = 0; x < a; ++x) {
+                t[x] = row[0];
+            }
+            for (int x = a; x < b; ++x) {
+                t[x] = row[x0 + x];
+            }
+            for (int x = b; x < nc; ++x) {
+                t[x] = row[w - 1];
+            }
+        }
+    }
+}
+
+/* Bilinear interpolation with Q7 weights of tile row t (next row at t + ts; 0..255) at n (a
+ * multiple of 8) columns: q7 (<= 32640) and q3 (its >> 4, rounded; <= 2040). */
+static void interp_q7_q3(const int16_t *restrict t, int ts, int n, int16_t w0, int16_t w1,
+                         int16_t w2, int16_t w3, int16_t *restrict q7, int16_t *restrict q3)
+{
+    for (int x = 0; x < n; x += 8) {
+        for (int i = 0; i < 8; ++i) {
+            const int k = x + i;
+            const int16_t v = (int16_t)(t[k] * w0 + t[k + 1] * w1 + t[k + ts] * w2 +
+                                        t[k + ts + 1] * w3);
+            q7[k] = v;
+            q3[k] = (int16_t)((v + 8) >> 4);
+        }
+    }
+}
+
+/* One window row from interpolated rows: Q3 rows a, b, c (above, at, below the window row,
+ * starting one column left of the window), Q7 row g7 (the window row, same start); n (a multiple
+ * of 8) columns of Iv (Q5), Ix, Iy (Scharr units). */
+static void grad_row(const int16_t *restrict a, const int16_t *restrict b,
+                     const int16_t *restrict c, const int16_t *restrict g7, int n,
+                     int16_t *restrict iv, int16_t *restrict ix, int16_t *restrict iy)
+{
+    int16_t vs[GS_MAX], vd[GS_MAX]; /* vertical smoothing / difference per column */
+    for (int x = 0; x < n + 8; x += 8) {
+        for (int i = 0; i < 8; ++i) {
+            vs[x + i] = (int16_t)(3 * (a[x + i] + c[x + i]) + 10 * b[x + i]);
+            vd[x + i] = (int16_t)(c[x + i] - a[x + i]);
+        }
+    }
+    for (int x = 0; x < n; x += 8) {
+        for (int i = 0; i < 8; ++i) {
+            const int k = x + i;
+            iv[k] = (int16_t)((g7[k + 1] + 2) >> 2);
+            ix[k] = (int16_t)((vs[k + 2] - vs[k] + 4) >> 3);
+            iy[k] = (int16_t)((3 * (vd[k] + vd[k + 2]) + 10 * vd[k + 1] + 4) >> 3);
+        }
+    }
+}
+
+/* Patch of I at integer origin (ix, iy) plus a sub-pixel offset given by Q7 weights wt: the
+ * grey tile around it (border replicated) is interpolated to Q7 (int16 lanes), giving Iv in Q5
+ * (>> 2, rounded) and, from Q3 values (<= 2040), Scharr gradients ([3 10 3]^T x [-1 0 1] and its
+ * transpose; |.| <= 16 * 2040 = 32640 in int16) brought back to Scharr units of grey levels
+ * (>> 3, rounded; |.| <= 4080) in Ix, Iy. Linear filters commute, so this equals OpenCV's
+ * gradients-then-interpolation up to rounding. Padding columns get zero gradients. */
+static void lk_patch(lk_scratch_t *s, const uint8_t *I, int wI, int hI, int ix, int iy, int win,
+                     const int16_t wt[4])
+{
+    const int wp = WPAD(win), gs = wp + 8, ts = wp + 16;
+    const int16_t w0 = wt[0], w1 = wt[1], w2 = wt[2], w3 = wt[3];
+    load_tile(I, wI, hI, ix - 1, iy - 1, win + 3, ts, s->T, ts);
+    /* interpolated rows iy-1 .. iy+win, columns ix-1 .. ix+wp+6: Q7 in Gg, Q3 in Gx */
+    for (int y = 0; y < win + 2; ++y) {
+        interp_q7_q3(s->T + y * ts, ts, gs, w0, w1, w2, w3, s->Gg + y * gs, s->Gx + y * gs);
+    }
+    for (int y = 0; y < win; ++y) {
+        const int16_t *p3 = s->Gx + y * gs;
+        grad_row(p3, p3 + gs, p3 + 2 * gs, s->Gg + (y + 1) * gs, wp, s->Iv + y * wp,
+                 s->Ix + y * wp, s->Iy + y * wp);
+        for (int x = win; x < wp; ++x) {
+            s->Ix[y * wp + x] = s->Iy[y * wp + x] = 0; /* padding: no contribution */
+        }
+    }
+}
+
+/* Bilinear interpolation of grey-level grid row g (next row at g + gs; 0..255) at wp (a
+ * multiple of 8) columns with Q7 weights, to Q5 (Q7 sum <= 32640 in int16, >> 2 rounded). */
+static void interp_row_q7(const int16_t *restrict g, int gs, int wp, int16_t w0, int16_t w1,
+                          int16_t w2, int16_t w3, int16_t *restrict out)
+{
+    for (int x = 0; x < wp; x += 8) {
+        for (int i = 0; i < 8; ++i) {
+            const int k = x + i;
+            const int16_t v = (int16_t)(g[k] * w0 + g[k + 1] * w1 + g[k + gs] * w2 +
+                                        g[k + gs + 1] * w3);
+            out[k] = (int16_t)((v + 2) >> 2);
+        }
+    }
+}
+
+/* J in Q5 on the window at integer origin (jx, jy) with Q7 weights wj (into s->Jv): the
+ * (win+1) x (wp+8) grid of J widened to int16 (border replicated), then interpolated. */
+static void lk_sample(lk_scratch_t *s, const uint8_t *J, int wJ, int hJ, int jx, int jy, int win,
+                      const int16_t wj[4])
+{
+    const int wp = WPAD(win), gs = wp + 8;
+    load_tile(J, wJ, hJ, jx, jy, win + 1, gs, s->Jg, gs);
+    const int16_t w0 = wj[0], w1 = wj[1], w2 = wj[2], w3 = wj[3];
+    for (int y = 0; y < win; ++y) {
+        interp_row_q7(s->Jg + y * gs, gs, wp, w0, w1, w2, w3, s->Jv + y * wp);
+    }
+}
+
+/* Tracks one point from pyramid pI into pJ using the n_lev finest levels (<= both pyramids and
+ * cfg.levels). p_q16: level-0 position in I; *q_q16: level-0 result in J. Iterations stop at a
+ * step under cfg.eps_q16 at level 0 and under 4 x cfg.eps_q16 at coarser levels (their result
+ * is only the start of the next finer level). Returns 1 if tracked, 0 if lost (out of bounds,
+ * too little texture, singular at level 0, residual above cfg.max_err_q5). */
+static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_t *pJ, int n_lev,
                     const int32_t p_q16[2], int32_t q_q16[2])
 {
-    const int win = cfg->win, half = (cfg->win - 1) / 2;
+    const int win = cfg->win, half = (cfg->win - 1) / 2, wp = WPAD(cfg->win);
     const int area = win * win;
-    int16_t Ival[PATCH_MAX], Ix[PATCH_MAX], Iy[PATCH_MAX]; /* Q5; Scharr */
-    int16_t Gg[GRID_MAX], Gx[GRID_MAX], Gy[GRID_MAX];      /* grey; Scharr at the grid */
-    int n_lev = pI->n_lev < pJ->n_lev ? pI->n_lev : pJ->n_lev;
-    if (n_lev > cfg->levels) {
-        n_lev = cfg->levels;
+    lk_scratch_t s;
+    if (n_lev > pI->n_lev) {
+        n_lev = pI->n_lev;
+    }
+    if (n_lev > pJ->n_lev) {
+        n_lev = pJ->n_lev;
     }
     int32_t nx = 0, ny = 0; /* level position of the estimate in J, Q16 */
-    int32_t res_last = 0;   /* residual of the last iteration, sum |J - I|, Q5 */
-    const int64_t eps2 = (int64_t)cfg->eps_q16 * cfg->eps_q16;
+    int32_t res_last = 0;   /* residual of the last iteration at level 0, sum |J - I|, Q5 */
 
     for (int l = n_lev - 1; l >= 0; --l) {
         const rp_pyr_level_t *LI = &pI->lev[l], *LJ = &pJ->lev[l];
         const uint8_t *I = pI->pix + LI->off, *J = pJ->pix + LJ->off;
         const int wI = LI->w, hI = LI->h, wJ = LJ->w, hJ = LJ->h;
+        const int64_t eps = (int64_t)cfg->eps_q16 * (l > 0 ? 4 : 1);
+        const int64_t eps2 = eps * eps;
         /* point at this level (Q16; an arithmetic shift of a position >= -2^15 px) */
         const int32_t px = p_q16[0] / (1 << l), py = p_q16[1] / (1 << l);
         if (l == n_lev - 1) {
@@ -247,65 +434,26 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
             }
             continue;
         }
-        int32_t wt[4];
-        weights_q14(ox & 0xffff, oy & 0xffff, wt);
-        /* Patch of I and its Scharr gradients ([3 10 3]^T x [-1 0 1], |.| <= 16 * 255 = 4080)
-         * on the (win+1)^2 integer grid (border replicated), then interpolated. */
-        const int gw = win + 1;
-        const int in_I = ix >= 1 && iy >= 1 && ix + gw < wI && iy + gw < hI; /* no clamping */
-        for (int y = 0; y < gw; ++y) {
-            for (int x = 0; x < gw; ++x) {
-                const int X = ix + x, Y = iy + y;
-                int a0, a1, a2, b0, b1, b2, c0, c1, c2;
-                if (in_I) {
-                    const uint8_t *q = I + (size_t)Y * wI + X;
-                    a0 = q[-wI - 1]; a1 = q[-wI]; a2 = q[-wI + 1];
-                    b0 = q[-1]; b1 = q[0]; b2 = q[1];
-                    c0 = q[wI - 1]; c1 = q[wI]; c2 = q[wI + 1];
-                } else {
-                    a0 = px_at(I, wI, hI, X - 1, Y - 1); a1 = px_at(I, wI, hI, X, Y - 1);
-                    a2 = px_at(I, wI, hI, X + 1, Y - 1); b0 = px_at(I, wI, hI, X - 1, Y);
-                    b1 = px_at(I, wI, hI, X, Y); b2 = px_at(I, wI, hI, X + 1, Y);
-                    c0 = px_at(I, wI, hI, X - 1, Y + 1); c1 = px_at(I, wI, hI, X, Y + 1);
-                    c2 = px_at(I, wI, hI, X + 1, Y + 1);
-                }
-                const int k = y * gw + x;
-                Gg[k] = (int16_t)b1;
-                Gx[k] = (int16_t)(3 * (a2 - a0) + 10 * (b2 - b0) + 3 * (c2 - c0));
-                Gy[k] = (int16_t)(3 * (c0 - a0) + 10 * (c1 - a1) + 3 * (c2 - a2));
-            }
-        }
-        int64_t A11 = 0, A12 = 0, A22 = 0;
-        for (int y = 0; y < win; ++y) {
-            for (int x = 0; x < win; ++x) {
-                const int k0 = y * gw + x, k1 = k0 + 1, k2 = k0 + gw, k3 = k2 + 1;
-                /* intensity: Q0 * Q14 -> Q5 (>> 9, rounded), <= 8160; gradient Q14 -> Q0 */
-                const int32_t iv = (Gg[k0] * wt[0] + Gg[k1] * wt[1] + Gg[k2] * wt[2] +
-                                    Gg[k3] * wt[3] + (1 << 8)) >> 9;
-                const int32_t gx = (Gx[k0] * wt[0] + Gx[k1] * wt[1] + Gx[k2] * wt[2] +
-                                    Gx[k3] * wt[3] + (1 << 13)) >> 14;
-                const int32_t gy = (Gy[k0] * wt[0] + Gy[k1] * wt[1] + Gy[k2] * wt[2] +
-                                    Gy[k3] * wt[3] + (1 << 13)) >> 14;
-                const int k = y * win + x;
-                Ival[k] = (int16_t)iv;
-                Ix[k] = (int16_t)gx;
-                Iy[k] = (int16_t)gy;
-                A11 += (int64_t)gx * gx;
-                A12 += (int64_t)gx * gy;
-                A22 += (int64_t)gy * gy;
-            }
-        }
+        int16_t wt[4];
+        weights_q7(ox & 0xffff, oy & 0xffff, wt);
+        lk_patch(&s, I, wI, hI, ix, iy, win, wt);
+        /* the patch sits at the position rounded to 1/128 px: track that point, then move the
+         * result back by the rounding (a translation locally) */
+        const int32_t qx = ((((ox & 0xffff) + 256) >> 9) << 9) - (ox & 0xffff);
+        const int32_t qy = ((((oy & 0xffff) + 256) >> 9) << 9) - (oy & 0xffff);
+        int64_t A11, A12, A22;
+        sum_sq3(s.Ix, s.Iy, win * wp, &A11, &A12, &A22);
         /* Texture test: min eigenvalue of A / area vs cfg.min_eig (OpenCV's units x 2^20, A in
-         * Scharr^2 like OpenCV before its 2^-20 scale). Work with A >> s < 2^29. */
+         * Scharr^2 like OpenCV before its 2^-20 scale). Work with A >> s < 2^25. */
         {
-            int s = 0;
-            while (((A11 | A22 | iabs64(A12)) >> s) >= ((int64_t)1 << 29)) {
-                ++s;
+            int sh = 0;
+            while (((A11 | A22 | iabs64(A12)) >> sh) >= ((int64_t)1 << 25)) {
+                ++sh;
             }
-            const int64_t a = A11 >> s, c = A22 >> s, b = A12 >> s;
-            const int64_t disc = (a - c) * (a - c) + 4 * b * b;
-            const int64_t two_min = a + c - (int64_t)isqrt64((uint64_t)disc); /* 2 x min eig */
-            const int64_t thr = ((int64_t)2 * area * cfg->min_eig) >> s;
+            const int64_t a = A11 >> sh, c = A22 >> sh, b = A12 >> sh;
+            const int64_t disc = (a - c) * (a - c) + 4 * b * b; /* < 2^52 */
+            const int64_t two_min = a + c - (int64_t)isqrt52((uint64_t)disc); /* 2 x min eig */
+            const int64_t thr = ((int64_t)2 * area * cfg->min_eig) >> sh;
             if (two_min < thr || a * c - b * b <= 0) {
                 if (l == 0) {
                     return 0;
@@ -314,6 +462,9 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
             }
         }
         int32_t pdx = 0, pdy = 0; /* previous step, Q16 */
+        int iterated = 0;
+        nx += qx;
+        ny += qy;
         for (int it = 0; it < cfg->max_iter; ++it) {
             const int32_t jx0 = nx - half * Q16, jy0 = ny - half * Q16;
             const int jx = jx0 >> 16, jy = jy0 >> 16;
@@ -323,43 +474,22 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
                 }
                 break;
             }
-            int32_t wj[4];
-            weights_q14(jx0 & 0xffff, jy0 & 0xffff, wj);
-            int64_t b1 = 0, b2 = 0;
-            int32_t res = 0; /* sum |J - I| over the window, Q5, <= 8160 * 63^2 < 2^25 */
-            const int inside = jx >= 0 && jy >= 0 && jx + win < wJ && jy + win < hJ;
-            for (int y = 0; y < win; ++y) {
-                for (int x = 0; x < win; ++x) {
-                    int g0, g1, g2, g3;
-                    if (inside) {
-                        const uint8_t *r = J + (size_t)(jy + y) * wJ + jx + x;
-                        g0 = r[0];
-                        g1 = r[1];
-                        g2 = r[wJ];
-                        g3 = r[wJ + 1];
-                    } else {
-                        g0 = px_at(J, wJ, hJ, jx + x, jy + y);
-                        g1 = px_at(J, wJ, hJ, jx + x + 1, jy + y);
-                        g2 = px_at(J, wJ, hJ, jx + x, jy + y + 1);
-                        g3 = px_at(J, wJ, hJ, jx + x + 1, jy + y + 1);
-                    }
-                    const int32_t jv = (g0 * wj[0] + g1 * wj[1] + g2 * wj[2] + g3 * wj[3] +
-                                        (1 << 8)) >> 9; /* Q5 */
-                    const int k = y * win + x;
-                    const int32_t diff = jv - Ival[k]; /* Q5, |.| <= 8160 */
-                    res += diff < 0 ? -diff : diff;
-                    b1 += (int64_t)diff * Ix[k];
-                    b2 += (int64_t)diff * Iy[k];
-                }
-            }
-            /* delta = -A^-1 b (px: Q5 x Scharr over Scharr^2 x 32 = px). Scale A, b by 2^-s so
+            int16_t wj[4];
+            weights_q7(jx0 & 0xffff, jy0 & 0xffff, wj);
+            /* J is sampled at the estimate rounded to 1/128 px: the step is taken from there */
+            nx += ((((jx0 & 0xffff) + 256) >> 9) << 9) - (jx0 & 0xffff);
+            ny += ((((jy0 & 0xffff) + 256) >> 9) << 9) - (jy0 & 0xffff);
+            lk_sample(&s, J, wJ, hJ, jx, jy, win, wj);
+            iterated = 1;
+            int64_t b1, b2;
+            sum_mismatch(s.Jv, s.Iv, s.Ix, s.Iy, win * wp, &b1, &b2);
+            /* delta = -A^-1 b (px: Q5 x Scharr over Scharr^2 x 32 = px). Scale A, b by 2^-sh so
              * all < 2^22: det < 2^44, numerators < 2^45, times 2^16 < 2^61 (no overflow). */
-            int s = 0;
-            while (((A11 | A22 | iabs64(b1) | iabs64(b2)) >> s) >= ((int64_t)1 << 22)) {
-                ++s;
+            int sh = 0;
+            while (((A11 | A22 | iabs64(b1) | iabs64(b2)) >> sh) >= ((int64_t)1 << 22)) {
+                ++sh;
             }
-            const int64_t a = A11 >> s, c = A22 >> s, b = A12 >> s, u = b1 >> s, v = b2 >> s;
-            res_last = res;
+            const int64_t a = A11 >> sh, c = A22 >> sh, b = A12 >> sh, u = b1 >> sh, v = b2 >> sh;
             const int64_t det = a * c - b * b;
             if (det <= 0) {
                 if (l == 0) {
@@ -382,6 +512,20 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
             pdx = dx;
             pdy = dy;
         }
+        nx -= qx;
+        ny -= qy;
+        if (l == 0 && iterated) {
+            /* residual of the last iteration, over the window's real columns */
+            int32_t res = 0; /* Q5, <= 8160 * 63^2 < 2^25 */
+            for (int y = 0; y < win; ++y) {
+                const int16_t *jv = s.Jv + y * wp, *iv = s.Iv + y * wp;
+                for (int x = 0; x < win; ++x) {
+                    const int32_t d = jv[x] - iv[x];
+                    res += d < 0 ? -d : d;
+                }
+            }
+            res_last = res;
+        }
     }
     q_q16[0] = nx;
     q_q16[1] = ny;
@@ -394,58 +538,113 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
 
 /* ---- detection ------------------------------------------------------------------------------ */
 
-/* Shi-Tomasi response 2 x min eigenvalue of the 3x3-block structure tensor of 3x3 Sobel
- * gradients (as cv::cornerMinEigenVal, blockSize 3, up to its positive scale), Sobel |.| <= 1020,
- * tensor entries <= 9 * 1020^2 < 2^24 (int32), response in int32. Pixels within 2 of the border
- * get 0, and so do pixels whose bound 2 min(a, c) is under cfg.min_response (no square root
- * spent on flat areas). Streams the gradient products through a 3-row ring. Returns the largest
- * response. */
-static int32_t response_map(rp_tracker_t *trk, const uint8_t *p, int w, int h)
+/* Shi-Tomasi response: 2 x min eigenvalue of the 3x3-block structure tensor of 3x3 Sobel
+ * gradients (as cv::cornerMinEigenVal, blockSize 3, up to its positive scale). Sobel |.| <= 1020,
+ * tensor entries <= 9 * 1020^2 < 2^24 (int32), discriminant < 2^51, response in int32.
+ * Detection streams image rows through three small rings (Sobel products, responses) over one
+ * rectangle of the image at a time; no full-frame map is kept. */
+
+/* Sobel products of image row y at columns [xa, xb) (1 <= y <= h-2, 1 <= xa, xb <= w-1). */
+static void det_products(const uint8_t *p, int w, int y, int xa, int xb, int32_t *xx,
+                         int32_t *xy, int32_t *yy)
 {
-    int32_t *R = trk->resp;
+    const uint8_t *r0 = p + (size_t)(y - 1) * w, *r1 = r0 + w, *r2 = r1 + w;
+    for (int x = xa; x < xb; ++x) {
+        const int gx = (r0[x + 1] - r0[x - 1]) + 2 * (r1[x + 1] - r1[x - 1]) +
+                       (r2[x + 1] - r2[x - 1]);
+        const int gy = (r2[x - 1] - r0[x - 1]) + 2 * (r2[x] - r0[x]) + (r2[x + 1] - r0[x + 1]);
+        xx[x] = gx * gx;
+        xy[x] = gx * gy;
+        yy[x] = gy * gy;
+    }
+}
+
+/* Responses of the row whose products are in slot b (rows above/below in a, c) at columns
+ * [xa, xb) into out; 0 where the bound 2 min(sxx, syy) is under floor_r (no square root spent on
+ * flat areas). Returns the largest. */
+static int32_t det_responses(rp_tracker_t *trk, int a, int b, int c, int xa, int xb,
+                             int32_t floor_r, int32_t *out)
+{
+    int32_t *vxx = trk->vsum[0], *vxy = trk->vsum[1], *vyy = trk->vsum[2];
+    for (int x = xa - 1; x < xb + 1; ++x) {
+        vxx[x] = trk->prod[a][0][x] + trk->prod[b][0][x] + trk->prod[c][0][x];
+        vxy[x] = trk->prod[a][1][x] + trk->prod[b][1][x] + trk->prod[c][1][x];
+        vyy[x] = trk->prod[a][2][x] + trk->prod[b][2][x] + trk->prod[c][2][x];
+    }
     int32_t best = 0;
-    const int32_t floor_r = (int32_t)trk->cfg.min_response;
-    memset(R, 0, sizeof(int32_t) * (size_t)w * h);
-    for (int y = 1; y < h - 1; ++y) {
-        /* products of row y into ring slot y % 3 */
-        int32_t *xx = trk->ring[y % 3][0], *xy = trk->ring[y % 3][1], *yy = trk->ring[y % 3][2];
-        const uint8_t *r0 = p + (size_t)(y - 1) * w, *r1 = r0 + w, *r2 = r1 + w;
-        for (int x = 1; x < w - 1; ++x) {
-            const int gx = (r0[x + 1] - r0[x - 1]) + 2 * (r1[x + 1] - r1[x - 1]) +
-                           (r2[x + 1] - r2[x - 1]);
-            const int gy = (r2[x - 1] - r0[x - 1]) + 2 * (r2[x] - r0[x]) + (r2[x + 1] - r0[x + 1]);
-            xx[x] = gx * gx;
-            xy[x] = gx * gy;
-            yy[x] = gy * gy;
-        }
-        if (y < 3) {
+    for (int x = xa; x < xb; ++x) {
+        const int32_t sxx = vxx[x - 1] + vxx[x] + vxx[x + 1];
+        const int32_t sxy = vxy[x - 1] + vxy[x] + vxy[x + 1];
+        const int32_t syy = vyy[x - 1] + vyy[x] + vyy[x + 1];
+        if (2 * (sxx < syy ? sxx : syy) < floor_r) {
+            out[x] = 0;
             continue;
         }
-        const int yc = y - 1; /* block rows yc-1 .. yc+1 are in the ring now */
-        if (yc >= h - 2) {
-            break;
+        const int64_t d = (int64_t)(sxx - syy);
+        const uint64_t disc = (uint64_t)(d * d + 4 * (int64_t)sxy * sxy);
+        const int32_t r = (int32_t)((int64_t)sxx + syy - (int64_t)isqrt52(disc));
+        out[x] = r;
+        best = r > best ? r : best;
+    }
+    return best;
+}
+
+/* Local maxima (>= the 8 neighbours, as cv::dilate) of response row y (rows y-1, y, y+1 in
+ * up, mid, dn) at columns [xa, xb), at least floor_r, kept per cell: the best
+ * RP_TRACK_CELL_CANDS of each by insertion. */
+static void det_maxima(rp_tracker_t *trk, const int32_t *up, const int32_t *mid,
+                       const int32_t *dn, int y, int xa, int xb, int32_t floor_r,
+                       const uint8_t *cell_x, int cell_row)
+{
+    for (int x = xa; x < xb; ++x) {
+        const int32_t v = mid[x];
+        if (v < floor_r || v <= 0 || v < mid[x - 1] || v < mid[x + 1] || v < up[x - 1] ||
+            v < up[x] || v < up[x + 1] || v < dn[x - 1] || v < dn[x] || v < dn[x + 1]) {
+            continue;
         }
-        const int32_t(*ra)[RP_TRACK_MAX_W] = trk->ring[(yc - 1) % 3];
-        const int32_t(*rb)[RP_TRACK_MAX_W] = trk->ring[yc % 3];
-        const int32_t(*rc)[RP_TRACK_MAX_W] = trk->ring[(yc + 1) % 3];
-        int32_t *Rrow = R + (size_t)yc * w;
-        for (int x = 2; x < w - 2; ++x) {
-            int32_t sxx = 0, sxy = 0, syy = 0;
-            for (int i = x - 1; i <= x + 1; ++i) {
-                sxx += ra[0][i] + rb[0][i] + rc[0][i];
-                sxy += ra[1][i] + rb[1][i] + rc[1][i];
-                syy += ra[2][i] + rb[2][i] + rc[2][i];
-            }
-            if (2 * (sxx < syy ? sxx : syy) < floor_r) {
+        const int c = cell_row + cell_x[x];
+        rp_track_cand_t *cc = trk->cand[c];
+        int n = trk->n_cand[c];
+        if (n == RP_TRACK_CELL_CANDS) {
+            if (cc[n - 1].r >= v) {
                 continue;
             }
-            const int64_t d = (int64_t)(sxx - syy);
-            const int64_t disc = d * d + 4 * (int64_t)sxy * sxy;
-            const int32_t r = (int32_t)((int64_t)sxx + syy - (int64_t)isqrt64((uint64_t)disc));
-            Rrow[x] = r;
-            if (r > best) {
-                best = r;
-            }
+            --n;
+        }
+        int j = n;
+        while (j > 0 && cc[j - 1].r < v) {
+            cc[j] = cc[j - 1];
+            --j;
+        }
+        cc[j].r = v;
+        cc[j].x = (uint16_t)x;
+        cc[j].y = (uint16_t)y;
+        trk->n_cand[c] = (uint16_t)(n + 1);
+    }
+}
+
+/* Candidates of the rectangle [x0, x1) x [y0, y1) of image p (3 <= x0, x1 <= w-3, same for y):
+ * rows stream through the rings (products two rows ahead, responses one row ahead of the
+ * maxima). Returns the largest response seen. */
+static int32_t det_rect(rp_tracker_t *trk, const uint8_t *p, int w, int x0, int x1, int y0,
+                        int y1, const uint8_t *cell_x, const uint8_t *cell_y)
+{
+    const int32_t floor_r = (int32_t)trk->cfg.min_response;
+    int32_t best = 0;
+    for (int yy = y0 - 2; yy <= y1 + 1; ++yy) {
+        det_products(p, w, yy, x0 - 2, x1 + 2, trk->prod[yy % 3][0], trk->prod[yy % 3][1],
+                     trk->prod[yy % 3][2]);
+        if (yy < y0) {
+            continue;
+        }
+        const int ry = yy - 1; /* its product rows ry-1 .. ry+1 are in the ring now */
+        const int32_t r = det_responses(trk, (ry - 1) % 3, ry % 3, yy % 3, x0 - 1, x1 + 1,
+                                        floor_r, trk->rrow[ry % 3]);
+        best = r > best ? r : best;
+        const int ny = ry - 1; /* its response rows ny-1 .. ny+1 are in the ring now */
+        if (ny >= y0) {
+            det_maxima(trk, trk->rrow[(ny - 1) % 3], trk->rrow[ny % 3], trk->rrow[ry % 3], ny,
+                       x0, x1, floor_r, cell_x, cell_y[ny] * trk->cfg.grid_x);
         }
     }
     return best;
@@ -477,85 +676,96 @@ static int cell_of(const rp_track_cfg_t *cfg, int w, int h, int32_t x, int32_t y
     return cy * cfg->grid_x + cx;
 }
 
-/* Detects up to want new features in the current level-0 image, away (min_dist) from the
- * tracked ones, with per-cell caps counting the tracked ones. Returns the number added. */
-static int detect(rp_tracker_t *trk, int want)
+/* One detection pass over the cells marked in scan[]: candidates of those cells, then the
+ * strongest first, above the quality threshold, min_dist away from every feature, within the
+ * cells' caps (per_cell counts features already there and is updated). Returns the number
+ * added (at most want). *best: the largest response seen so far (in, out). */
+static int detect_pass(rp_tracker_t *trk, const uint8_t *scan, uint16_t *per_cell, int want,
+                       int32_t *best)
 {
     const rp_track_cfg_t *cfg = &trk->cfg;
     const rp_pyr_t *P = &trk->pyr[trk->cur];
-    const int w = P->lev[0].w, h = P->lev[0].h;
+    const int w = P->lev[0].w, h = P->lev[0].h, gx = cfg->grid_x, gy = cfg->grid_y;
     const uint8_t *p = P->pix;
-    const int ncell = cfg->grid_x * cfg->grid_y;
-    if (want <= 0) {
-        return 0;
+    uint8_t cell_x[RP_TRACK_MAX_W], cell_y[RP_TRACK_MAX_H];
+    int xs[RP_TRACK_MAX_CELLS + 1], ys[RP_TRACK_MAX_CELLS + 1]; /* first column / row of a cell */
+    for (int x = 0; x < w; ++x) {
+        cell_x[x] = (uint8_t)(x * gx / w);
     }
-    const int32_t best = response_map(trk, p, w, h);
-    int32_t thr = (int32_t)(((int64_t)best * cfg->quality_q16) >> 16);
+    for (int y = 0; y < h; ++y) {
+        cell_y[y] = (uint8_t)(y * gy / h);
+    }
+    for (int c = 0; c <= gx; ++c) {
+        xs[c] = clampi((c * w + gx - 1) / gx, 3, w - 3);
+    }
+    for (int c = 0; c <= gy; ++c) {
+        ys[c] = clampi((c * h + gy - 1) / gy, 3, h - 3);
+    }
+    /* rectangles: runs of marked cells along each cell row; a run whose cell row above had the
+     * same run continues that rectangle (a full image is one rectangle) */
+    int n_rect = 0;
+    int rx0[RP_TRACK_MAX_CELLS], rx1[RP_TRACK_MAX_CELLS], ry0[RP_TRACK_MAX_CELLS],
+        ry1[RP_TRACK_MAX_CELLS], rc0[RP_TRACK_MAX_CELLS], rc1[RP_TRACK_MAX_CELLS];
+    for (int cy = 0; cy < gy; ++cy) {
+        for (int cx = 0; cx < gx; ++cx) {
+            if (!scan[cy * gx + cx]) {
+                continue;
+            }
+            int ce = cx;
+            while (ce + 1 < gx && scan[cy * gx + ce + 1]) {
+                ++ce;
+            }
+            int r = 0;
+            while (r < n_rect && !(rc0[r] == cx && rc1[r] == ce && ry1[r] == ys[cy])) {
+                ++r;
+            }
+            if (r == n_rect) {
+                rc0[r] = cx;
+                rc1[r] = ce;
+                rx0[r] = xs[cx];
+                rx1[r] = xs[ce + 1];
+                ry0[r] = ys[cy];
+                ++n_rect;
+            }
+            ry1[r] = ys[cy + 1];
+            cx = ce;
+        }
+    }
+    for (int c = 0; c < gx * gy; ++c) {
+        if (scan[c]) {
+            trk->n_cand[c] = 0;
+        }
+    }
+    for (int r = 0; r < n_rect; ++r) {
+        if (rx0[r] < rx1[r] && ry0[r] < ry1[r]) {
+            const int32_t b = det_rect(trk, p, w, rx0[r], rx1[r], ry0[r], ry1[r], cell_x, cell_y);
+            *best = b > *best ? b : *best;
+        }
+    }
+    int32_t thr = (int32_t)(((int64_t)*best * cfg->quality_q16) >> 16);
     if (thr < (int32_t)cfg->min_response) {
         thr = (int32_t)cfg->min_response;
     }
-    if (best < thr || best <= 0) {
-        return 0;
-    }
-    for (int c = 0; c < ncell; ++c) {
-        trk->n_cand[c] = 0;
-    }
-    /* local maxima (>= the 8 neighbours, as cv::dilate), kept per cell, best K by insertion */
-    const int32_t *R = trk->resp;
-    for (int y = 3; y < h - 3; ++y) {
-        for (int x = 3; x < w - 3; ++x) {
-            const int32_t *r = R + (size_t)y * w + x;
-            const int32_t v = r[0];
-            if (v < thr || v < r[-1] || v < r[1] || v < r[-w - 1] || v < r[-w] || v < r[-w + 1] ||
-                v < r[w - 1] || v < r[w] || v < r[w + 1]) {
-                continue;
-            }
-            const int c = cell_of(cfg, w, h, x, y);
-            rp_track_cand_t *cc = trk->cand[c];
-            int n = trk->n_cand[c];
-            if (n == RP_TRACK_CELL_CANDS) {
-                if (cc[n - 1].r >= v) {
-                    continue;
-                }
-                --n;
-            }
-            int j = n;
-            while (j > 0 && cc[j - 1].r < v) {
-                cc[j] = cc[j - 1];
-                --j;
-            }
-            cc[j].r = v;
-            cc[j].x = (uint16_t)x;
-            cc[j].y = (uint16_t)y;
-            trk->n_cand[c] = (uint16_t)(n + 1);
-        }
-    }
     int nl = 0;
-    for (int c = 0; c < ncell; ++c) {
-        for (int i = 0; i < trk->n_cand[c]; ++i) {
+    for (int c = 0; c < gx * gy; ++c) {
+        for (int i = 0; scan[c] && i < trk->n_cand[c] && trk->cand[c][i].r >= thr; ++i) {
             trk->list[nl++] = trk->cand[c][i];
         }
     }
     sort_cands(trk->list, nl);
-    uint16_t per_cell[RP_TRACK_MAX_CELLS];
-    for (int c = 0; c < ncell; ++c) {
-        per_cell[c] = 0;
-    }
-    for (int i = 0; i < trk->n; ++i) {
-        per_cell[cell_of(cfg, w, h, trk->pos_q16[i][0] >> 16, trk->pos_q16[i][1] >> 16)]++;
-    }
     const int64_t md2 = (int64_t)cfg->min_dist * cfg->min_dist * Q16 * Q16; /* Q32 px^2 */
     int added = 0;
     for (int i = 0; i < nl && added < want && trk->n < RP_MAX_FEATS_PER_CAM; ++i) {
         const rp_track_cand_t *k = &trk->list[i];
-        const int c = cell_of(cfg, w, h, k->x, k->y);
+        const int c = cell_y[k->y] * gx + cell_x[k->x];
         if (per_cell[c] >= cfg->cell_cap) {
             continue;
         }
         const int32_t kx = (int32_t)k->x * Q16, ky = (int32_t)k->y * Q16;
         int ok = 1;
         for (int f = 0; f < trk->n && ok; ++f) {
-            const int64_t dx = (int64_t)trk->pos_q16[f][0] - kx, dy = (int64_t)trk->pos_q16[f][1] - ky;
+            const int64_t dx = (int64_t)trk->pos_q16[f][0] - kx;
+            const int64_t dy = (int64_t)trk->pos_q16[f][1] - ky;
             if (dx * dx + dy * dy < md2) {
                 ok = 0;
             }
@@ -574,7 +784,64 @@ static int detect(rp_tracker_t *trk, int want)
     return added;
 }
 
+/* Tops up to want new features in the current level-0 image, away (min_dist) from the tracked
+ * ones, with per-cell caps counting the tracked ones. Only cells under their fair share
+ * (ceil(target / cells)) are searched first; the other cells under their cap only if the count
+ * is still under cfg.topup_below (or zero) after that. A first frame searches every cell.
+ * Returns the number added. */
+static int detect(rp_tracker_t *trk, int want)
+{
+    const rp_track_cfg_t *cfg = &trk->cfg;
+    const rp_pyr_t *P = &trk->pyr[trk->cur];
+    const int w = P->lev[0].w, h = P->lev[0].h;
+    const int ncell = cfg->grid_x * cfg->grid_y;
+    const int share = (cfg->target + ncell - 1) / ncell;
+    if (want <= 0) {
+        return 0;
+    }
+    uint16_t per_cell[RP_TRACK_MAX_CELLS];
+    uint8_t scan[RP_TRACK_MAX_CELLS];
+    for (int c = 0; c < ncell; ++c) {
+        per_cell[c] = 0;
+    }
+    for (int i = 0; i < trk->n; ++i) {
+        per_cell[cell_of(cfg, w, h, trk->pos_q16[i][0] >> 16, trk->pos_q16[i][1] >> 16)]++;
+    }
+    for (int c = 0; c < ncell; ++c) {
+        scan[c] = (uint8_t)(per_cell[c] < share);
+    }
+    int32_t best = 0;
+    int added = detect_pass(trk, scan, per_cell, want, &best);
+    if (added < want && (trk->n < cfg->topup_below || trk->n == 0)) {
+        int any = 0;
+        for (int c = 0; c < ncell; ++c) {
+            scan[c] = (uint8_t)(!scan[c] && per_cell[c] < cfg->cell_cap);
+            any |= scan[c];
+        }
+        if (any) {
+            added += detect_pass(trk, scan, per_cell, want - added, &best);
+        }
+    }
+    return added;
+}
+
 /* ---- the per-frame step --------------------------------------------------------------------- */
+
+/* Pyramid levels of the backward check: only as many as the forward displacement needs (a level
+ * reaches about a quarter window at its scale), at most cfg.levels. The backward pass starts at
+ * zero motion, like the forward one, so it stays an independent check. */
+static int back_levels(const rp_track_cfg_t *cfg, const int32_t p_q16[2], const int32_t f_q16[2])
+{
+    const int64_t dx = (int64_t)f_q16[0] - p_q16[0], dy = (int64_t)f_q16[1] - p_q16[1];
+    const int64_t d = (dx < 0 ? -dx : dx) + (dy < 0 ? -dy : dy); /* L1, Q16 px */
+    int64_t reach = (int64_t)((cfg->win - 1) / 4) * Q16;       /* per level, level-0 px */
+    int l = 1;
+    while (l < cfg->levels && d > reach) {
+        ++l;
+        reach *= 2;
+    }
+    return l;
+}
 
 static int is_blank(const rp_image_t *img, unsigned min_contrast)
 {
@@ -625,13 +892,14 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
         uint16_t m = 0;
         for (uint16_t i = 0; i < trk->n; ++i) {
             int32_t f[2], b[2];
-            if (!lk_point(&trk->cfg, P, C, trk->pos_q16[i], f) || f[0] < 0 || f[1] < 0 ||
+            if (!lk_point(&trk->cfg, P, C, trk->cfg.levels, trk->pos_q16[i], f) || f[0] < 0 || f[1] < 0 ||
                 f[0] > wq || f[1] > hq) {
                 inf.n_lost++;
                 continue;
             }
             if (trk->cfg.fb_max_q16 > 0) {
-                if (!lk_point(&trk->cfg, C, P, f, b)) {
+                if (!lk_point(&trk->cfg, C, P, back_levels(&trk->cfg, trk->pos_q16[i], f), f,
+                              b)) {
                     inf.n_lost_fb++;
                     continue;
                 }

@@ -7,8 +7,16 @@
  * Fixed-point formats used throughout (named in the code):
  *   positions   int32 Q16 pixels (origin at the top-left pixel centre), level coordinates
  *   gradients   int16 Scharr ([3 10 3] x [-1 0 1]: 32x the derivative in grey levels / px)
- *   intensities interpolated in Q5 (grey level x 32), bilinear weights Q14 (as OpenCV's LK)
- *   sums        int64 (structure tensor, mismatch vector); detection responses int32
+ *   intensities interpolated in Q5 (grey level x 32) with Q7 bilinear weights, in int16 lanes;
+ *               the sample points are rounded to 1/128 px and the estimate is corrected for it
+ *               (results within about 0.001 px of OpenCV's Q14 weights, tests/oracle_track.cpp)
+ *   sums        int32 over chunks of at most 64 window pixels (|product| < 2^25), then int64
+ *               (structure tensor, mismatch vector); detection responses int32
+ * Speed: window rows are padded to multiples of 8 pixels and every inner loop runs over whole
+ * blocks of 8, which compilers vectorise at -O2 (SSE2, NEON); plain C, no intrinsics. The
+ * backward check uses only the pyramid levels the forward displacement needs; coarse levels stop
+ * at 4x the convergence step; detection streams rows (no full-frame response map) and, on
+ * top-up, searches only the cells that lack features.
  */
 #ifndef RP_TRACK_H
 #define RP_TRACK_H
@@ -92,7 +100,7 @@ typedef struct {
     uint16_t x, y; /* pixel */
 } rp_track_cand_t;
 
-/* Per-camera tracker. Large (two pyramids and a response map): allocate it statically. */
+/* Per-camera tracker. Large (two pyramids, about 0.85 MB at 640x480): allocate it statically. */
 typedef struct {
     rp_track_cfg_t cfg;
     rp_pyr_t pyr[2];
@@ -103,9 +111,10 @@ typedef struct {
     uint16_t n;       /* current tracks */
     uint32_t id[RP_MAX_FEATS_PER_CAM];
     int32_t pos_q16[RP_MAX_FEATS_PER_CAM][2]; /* level-0 position, Q16 px */
-    /* scratch of detection */
-    int32_t resp[RP_TRACK_MAX_W * RP_TRACK_MAX_H]; /* 2 x min eigenvalue, Sobel units^2 */
-    int32_t ring[3][3][RP_TRACK_MAX_W]; /* Sobel products gx^2, gx gy, gy^2 of 3 rows */
+    /* scratch of detection: rows stream through small rings, no full-frame response map */
+    int32_t prod[3][3][RP_TRACK_MAX_W]; /* Sobel products gx^2, gx gy, gy^2 of 3 image rows */
+    int32_t vsum[3][RP_TRACK_MAX_W];    /* their vertical 3-sums on the response row */
+    int32_t rrow[3][RP_TRACK_MAX_W];    /* responses (2 x min eigenvalue) of 3 rows */
     rp_track_cand_t cand[RP_TRACK_MAX_CELLS][RP_TRACK_CELL_CANDS];
     uint16_t n_cand[RP_TRACK_MAX_CELLS];
     rp_track_cand_t list[RP_TRACK_MAX_CELLS * RP_TRACK_CELL_CANDS];
@@ -122,8 +131,10 @@ rp_status_t rp_track_default_cfg(rp_track_cfg_t *cfg);
 rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg);
 
 /* Tracks the features of the previous image into img, drops the bad ones (forward-backward,
- * texture, left the image), tops up to cfg.target, and writes at most cap features to out
- * (*n_out of them). info (may be NULL) receives the events.
+ * texture, left the image), tops up to cfg.target when fewer than cfg.topup_below remain
+ * (searching first the bucketing cells that hold fewer than ceil(target / cells) features, then,
+ * if the count is still under topup_below, the other cells under their cap), and writes at most
+ * cap features to out (*n_out of them). info (may be NULL) receives the events.
  * Returns:
  *   RP_OK         features in out (on RP_TRACK_ALL_LOST they are all new, re-detected)
  *   RP_E_ARG      NULL pointer; image larger than RP_TRACK_MAX_W x H or smaller than the window
