@@ -92,7 +92,7 @@ $(BUILD)/bench/daemon.json: $(REL)/rigpose FORCE
 ARM_SYSROOT := $(ARM)/sysroot
 ARM_SYSROOT_DEBS := liblcm1:arm64 liblcm-dev:arm64 libyaml-0-2:arm64 libyaml-dev:arm64 \
     libpng16-16:arm64 libpng-dev:arm64 zlib1g:arm64 zlib1g-dev:arm64 libjpeg62-turbo:arm64 \
-    libjpeg62-turbo-dev:arm64
+    libjpeg62-turbo-dev:arm64 libglib2.0-0:arm64 libpcre2-8-0:arm64
 $(ARM_SYSROOT)/stamp: daemon/daemon.mk
 	rm -rf $(ARM_SYSROOT) && mkdir -p $(ARM_SYSROOT)/debs
 	cd $(ARM_SYSROOT)/debs && apt-get download $(ARM_SYSROOT_DEBS)

@@ -34,6 +34,7 @@
 #include "rigpose/rp_hal_sim.h"
 #include "rigpose/rp_pipe.h"
 #include "rigpose/rp_rot.h"
+#include "rigpose_image_t.h"
 #include "rigpose_pose_t.h"
 #include "rigpose_status_t.h"
 #include "rp_est.h"
@@ -64,6 +65,7 @@ typedef struct {
     const char *lcm_url;    /* overrides, NULL: the file's */
     const char *pose_channel;
     const char *status_channel;
+    const char *image_channel;
     int fast;               /* 1: sim / replay as fast as possible (source.realtime off) */
     int drop_cam;           /* --sim-drop CAM:FRAME, -2: not given */
     uint32_t drop_from;
@@ -80,6 +82,7 @@ static rp_est_t g_est;      /* feature sources */
 static rp_pipe_t g_pipe;    /* image sources */
 static rp_hal_set_t g_set;
 static float g_lat_ms[LAT_KEEP];
+static uint8_t g_img_buf[RP_HAL_MAX_W * RP_HAL_MAX_H]; /* an image with padded rows, packed */
 
 static void on_signal(int sig)
 {
@@ -103,6 +106,7 @@ static void usage(FILE *f)
             "  --sim-drop CAM:FRAME  sim: camera CAM vanishes from frame set FRAME on\n"
             "  --print-every K       print every K-th pose (default 1)\n"
             "  --quiet               print no poses, only the summary\n"
+            "  --image-channel NAME  also publish every camera image (rigpose.image_t) there\n"
             "  --stats-json FILE     write daemon_latency_ms_p50/_p99 and daemon_fps to FILE\n"
             "exit codes: 0 done, 1 usage, 2 bad configuration, 3 LCM, 4 source open/start,\n"
             "            5 estimator setup, 6 source failed while running\n");
@@ -156,6 +160,9 @@ static int parse_args(int argc, char **argv, opts_t *o)
         } else if (strcmp(a, "--status-channel") == 0) {
             o->status_channel = v;
             ++i;
+        } else if (strcmp(a, "--image-channel") == 0) {
+            o->image_channel = v;
+            ++i;
         } else if (strcmp(a, "--print-every") == 0) {
             if (parse_u32(v, &o->print_every) != 0 || o->print_every == 0) {
                 fprintf(stderr, "rigpose: --print-every: '%s' is not a positive count\n", v);
@@ -195,6 +202,7 @@ static int apply_overrides(const opts_t *o, rp_config_t *cfg)
         {o->lcm_url, cfg->lcm_url, sizeof cfg->lcm_url, "--lcm-url"},
         {o->pose_channel, cfg->pose_channel, sizeof cfg->pose_channel, "--pose-channel"},
         {o->status_channel, cfg->status_channel, sizeof cfg->status_channel, "--status-channel"},
+        {o->image_channel, cfg->image_channel, sizeof cfg->image_channel, "--image-channel"},
     };
     for (size_t i = 0; i < sizeof s / sizeof s[0]; ++i) {
         if (s[i].v == NULL) {
@@ -342,6 +350,38 @@ static void fill_pose(rigpose_pose_t *m, const rp_hal_set_t *set, const rp_estim
     m->has_truth = set->has_truth ? 1 : 0;
     for (int i = 0; i < 6; ++i) {
         m->truth[i] = set->has_truth ? (double)set->truth[i] : 0.0;
+    }
+}
+
+/* Each camera's image of the set on the image channel (packed rows), if one is configured. */
+static void publish_images(lcm_t *lcm, const char *channel, const rp_hal_set_t *set, int32_t seq)
+{
+    for (uint8_t k = 0; k < set->n_cams; ++k) {
+        const rp_image_t *im = &set->cam[k].img;
+        const size_t n = (size_t)im->w * im->h;
+        if (im->data == NULL || n == 0 || im->stride < im->w ||
+            (size_t)im->stride * (im->h - 1u) + im->w > im->size) {
+            continue;
+        }
+        const uint8_t *packed = im->data;
+        if (im->stride != im->w) {
+            if (n > sizeof g_img_buf) {
+                continue;
+            }
+            for (uint16_t y = 0; y < im->h; ++y) {
+                memcpy(g_img_buf + (size_t)y * im->w, im->data + (size_t)y * im->stride, im->w);
+            }
+            packed = g_img_buf;
+        }
+        rigpose_image_t m;
+        m.utime = set->cam[k].utime;
+        m.seq = seq;
+        m.cam = (int8_t)k;
+        m.width = (int16_t)im->w;
+        m.height = (int16_t)im->h;
+        m.size = (int32_t)n;
+        m.data = (uint8_t *)(uintptr_t)packed;
+        (void)rigpose_image_t_publish(lcm, channel, &m);
     }
 }
 
@@ -502,6 +542,7 @@ int main(int argc, char **argv)
     memset(&est, 0, sizeof est);
 
     while (!g_stop && (o.frames == 0 || (uint32_t)pose_seq < o.frames)) {
+        const int64_t t_ask = rp_hal_now_us();
         hst = source_grab(&src, &g_set);
         if (hst == RP_HAL_E_END) {
             break;
@@ -535,7 +576,15 @@ int main(int argc, char **argv)
         if (rigpose_pose_t_publish(lcm, g_cfg.pose_channel, &pm) != 0) {
             fprintf(stderr, "rigpose: LCM publish on %s failed\n", g_cfg.pose_channel);
         }
-        const float lat_ms = (float)((double)(t_pub - g_set.utime) * 1e-3);
+        /* Latency from the frame's capture time, when the source stamps on the HAL clock
+         * (v4l2, sim, paced replay); a source replaying recorded stamps as fast as it can is
+         * timed from the moment its set was asked for. */
+        const int64_t t_frame =
+            (g_set.utime <= t_pub && g_set.utime >= t_ask - 60000000) ? g_set.utime : t_ask;
+        const float lat_ms = (float)((double)(t_pub - t_frame) * 1e-3);
+        if (g_cfg.image_channel[0] != '\0') {
+            publish_images(lcm, g_cfg.image_channel, &g_set, pose_seq);
+        }
         const float proc_ms = (float)((double)(t_pub - t_grab) * 1e-3);
         if (n_lat < LAT_KEEP) {
             g_lat_ms[n_lat++] = lat_ms;
@@ -630,7 +679,7 @@ int main(int argc, char **argv)
            "p99 %.3f ms%s\n",
            pose_seq, g_cfg.pose_channel, fps, p50, p99, g_stop ? " (stopped by signal)" : "");
     if (n_err > 0) {
-        printf("rigpose: mean abs error over sets 1..%u vs the simulated truth: tx %.6f ty %.6f "
+        printf("rigpose: mean abs error over sets 1..%u vs the source's truth: tx %.6f ty %.6f "
                "tz %.6f m, alpha %.6f beta %.6f gamma %.6f rad\n",
                n_err, err_sum[0] / n_err, err_sum[1] / n_err, err_sum[2] / n_err,
                err_sum[3] / n_err, err_sum[4] / n_err, err_sum[5] / n_err);
