@@ -80,8 +80,10 @@ $(BUILD)/bench/daemon.json: $(REL)/rigpose FORCE
 	@mkdir -p $(dir $@)
 	@$(REL)/rigpose --config config/sim.yaml --frames 300 --fast --quiet \
 	    --pose-channel RIGPOSE_BENCH_POSE_$$$$ --status-channel RIGPOSE_BENCH_STATUS_$$$$ \
-	    --stats-json $@ | tail -1 >/dev/null
-	@printf 'daemon (sim rig, stereo4, 300 sets, --fast): %s\n' "$$(cat $@)"
+	    --stats-json $@ >/dev/null
+	@$(PY) -c 'import json, sys; d = json.load(open(sys.argv[1])); \
+	    print("daemon: simulated rig, stereo4, 300 sets as fast as it goes, LCM udpm ttl=0"); \
+	    [print("  %-24s %10.3f" % kv) for kv in d.items()]' $@
 
 # ---- aarch64 daemon --------------------------------------------------------------------------------
 # The board's libraries (LCM, libyaml, libpng, libjpeg, zlib) as Debian arm64 packages, fetched
