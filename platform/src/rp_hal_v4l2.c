@@ -10,7 +10,9 @@
  *        are grouped by kernel timestamp (rp_hal_group): a set is complete when every live camera
  *        has a frame within sync_tol_us of the newest. A camera whose device fails (ENODEV: it
  *        was unplugged) or that delivers nothing for timeout_ms (stalled) is closed, flagged
- *        GONE | MISSING in every set, and reopened every retry_ms; the other cameras go on.
+ *        GONE | MISSING in every set, and reopened every retry_ms; the other cameras go on. A
+ *        reopened camera holds no set back until it delivers a frame (then it rejoins); if it
+ *        stays silent for timeout_ms it is closed again.
  */
 #include "rp_hal_priv.h"
 
@@ -165,6 +167,7 @@ typedef struct {
     size_t len[RP_HAL_V4L2_NBUF];
     uint8_t streaming;
     uint8_t gone;                 /* vanished or stalled: closed, reopened at retry_at */
+    uint8_t rejoining;            /* reopened, no frame delivered yet: holds no set back */
     int64_t retry_at;             /* HAL clock, us */
     int64_t last_frame;           /* HAL clock of the last frame dequeued, us */
     rp_hal_seq_t seq;
@@ -493,6 +496,7 @@ static void cam_lost(v4l2_src_t *s, v4l2_cam_t *c, const char *why, int64_t now)
                       (unsigned)s->cfg.retry_ms);
     cam_close(c);
     c->gone = 1;
+    c->rejoining = 0;
     c->retry_at = now + (int64_t)s->cfg.retry_ms * 1000;
 }
 
@@ -501,6 +505,7 @@ static void cam_retry(v4l2_src_t *s, v4l2_cam_t *c, int64_t now)
     char scratch[RP_HAL_ERR_MAX];
     if (cam_open(c, scratch) == RP_HAL_OK && cam_stream_on(c, scratch) == RP_HAL_OK) {
         c->gone = 0;
+        c->rejoining = 1;
         return;
     }
     cam_close(c);
@@ -609,13 +614,14 @@ static void fill_set(v4l2_src_t *s, rp_hal_set_t *set, const uint8_t in[])
         v4l2_cam_t *c = &s->cam[i];
         rp_hal_frame_t *f = &set->cam[i];
         f->drops = c->seq.drops;
-        if (c->gone) {
+        if (c->gone || (c->rejoining && !in[i])) {
             f->flags = RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE;
             continue;
         }
         if (!in[i]) {
             continue;
         }
+        c->rejoining = 0;
         f->img.data = c->grey;
         f->img.w = c->w;
         f->img.h = c->h;
@@ -640,7 +646,8 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
     if (!s->started) {
         return rp_hal_fail(s->err, RP_HAL_E_STATE, "v4l2: grab before start");
     }
-    const int64_t deadline = rp_hal_now_us() + (int64_t)s->cfg.timeout_ms * 1000;
+    const int64_t timeout_us = (int64_t)s->cfg.timeout_ms * 1000;
+    const int64_t deadline = rp_hal_now_us() + timeout_us;
     int64_t t[RP_MAX_CAMS] = {0};
     uint8_t have[RP_MAX_CAMS] = {0}, in[RP_MAX_CAMS] = {0};
     for (;;) {
@@ -653,12 +660,13 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
             if (!c->gone && cam_read(c) < 0) {
                 cam_lost(s, c, errno == ENODEV ? "vanished" : strerror(errno), now);
             }
+            if (!c->gone && now - c->last_frame >= timeout_us) {
+                cam_lost(s, c, "stalled (no frame within timeout_ms)", now);
+            }
         }
-        uint8_t live = 0;
         for (uint8_t i = 0; i < n; i++) {
             have[i] = (uint8_t)(!s->cam[i].gone && s->cam[i].pending);
             t[i] = s->cam[i].t_us;
-            live = (uint8_t)(live + !s->cam[i].gone);
         }
         int64_t anchor;
         const uint8_t k = rp_hal_group(t, have, n, s->cfg.sync_tol_us, in, &anchor);
@@ -667,19 +675,25 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
                 s->cam[i].pending = 0; /* stale: wait for the camera's next frame */
             }
         }
-        if (live > 0 && k == live) {
+        uint8_t complete = k > 0; /* every camera that is not gone or rejoining is in */
+        for (uint8_t i = 0; i < n; i++) {
+            const v4l2_cam_t *c = &s->cam[i];
+            complete = (uint8_t)(complete && (c->gone || c->rejoining || in[i]));
+        }
+        if (complete) {
             fill_set(s, set, in);
             set->seq = s->set_seq++;
             return RP_HAL_OK;
         }
         now = rp_hal_now_us();
         if (now >= deadline) {
-            for (uint8_t i = 0; i < n; i++) {
-                v4l2_cam_t *c = &s->cam[i];
-                if (!c->gone && !in[i] &&
-                    now - c->last_frame >= (int64_t)s->cfg.timeout_ms * 1000) {
-                    cam_lost(s, c, "stalled (no frame within timeout_ms)", now);
-                }
+            int len = snprintf(s->err, RP_HAL_ERR_MAX, "v4l2: no complete set in %u ms:",
+                               (unsigned)s->cfg.timeout_ms);
+            for (uint8_t i = 0; i < n && len > 0 && len < RP_HAL_ERR_MAX; i++) {
+                const v4l2_cam_t *c = &s->cam[i];
+                len += snprintf(s->err + len, (size_t)(RP_HAL_ERR_MAX - len), " cam%u %s",
+                                (unsigned)i, c->gone ? "gone" : c->rejoining ? "rejoining"
+                                             : in[i] ? "in" : have[i] ? "stale" : "no frame");
             }
             fill_set(s, set, in);
             return RP_HAL_E_TIMEOUT;
@@ -693,6 +707,8 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
                 wait = c->retry_at - now < wait ? c->retry_at - now : wait;
                 continue;
             }
+            const int64_t stall_at = c->last_frame + timeout_us;
+            wait = stall_at - now < wait ? stall_at - now : wait;
             pfd[np].fd = c->fd;
             pfd[np].events = POLLIN;
             pfd[np].revents = 0;

@@ -3,17 +3,18 @@
  * frame sets from several V4L2 devices at once through the HAL's v4l2 source and checks them.
  *
  *   vivid_capture [--sets N] [--size WxH] [--fps F] [--tol-ms T] [--drop-perc CAM:P]
- *                 [--disconnect CAM:SET] DEVICE...
+ *                 [--disconnect CAM:SET] [--stall CAM:SET:COUNT] DEVICE...
  *
  * Checks every set: all cameras present at the asked size, their kernel timestamps within the
  * tolerance of each other and near CLOCK_MONOTONIC now (at most 1 s old, at most two frame
  * periods ahead: vivid stamps the end of the frame period), set and camera times strictly
  * increasing, images not blank. Faults through vivid's own error-injection controls:
  * --drop-perc makes the driver skip P % of camera CAM's frames (its drop count must grow);
- * --disconnect unplugs camera CAM (vivid's "Disconnect" button) before set SET: the next sets
- * must come without it, flagged GONE | MISSING, with the other cameras present, until the HAL's
- * retry (every retry_ms = 500 ms) has reopened it (vivid re-registers the device once closed);
- * it must be back before the last set.
+ * --disconnect unplugs camera CAM (vivid's "Disconnect" button) before set SET (vivid registers
+ * the device again once its last user has closed it, like a camera plugged back in); --stall
+ * makes the driver drop all of CAM's frames from set SET for COUNT sets. Either way the
+ * camera must soon be missing from the sets, flagged GONE | MISSING, while the others keep
+ * coming, and be back (reopened by the HAL's retry every retry_ms = 500 ms) before the last set.
  * Prints one `key=value` line per figure, then `PASS` or `FAIL: reason`; exit 0 only on PASS.
  */
 #include <fcntl.h>
@@ -65,8 +66,17 @@ static int set_ctrl(const char *dev, const char *name, int value)
 
 int main(int argc, char **argv)
 {
-    int drop_cam = -1, drop_perc = 0, disc_cam = -1;
-    unsigned disc_set = 0;
+    int drop_cam = -1, drop_perc = 0;
+    enum { MAXF = 2 };
+    struct {
+        int cam;             /* camera, -1: none */
+        int stall;           /* 1: stall (100 % drops), 0: disconnect */
+        unsigned start, end; /* sets: fault before start; stall lifted before end */
+        unsigned gone_sets, back_set, present_after;
+    } fault[MAXF];
+    memset(fault, 0, sizeof fault);
+    fault[0].cam = fault[1].cam = -1;
+    unsigned nf = 0;
     unsigned n_sets = 50, w = 640, h = 480, fps = 25, tol_ms = 40;
     rp_hal_cfg_t cfg;
     memset(&cfg, 0, sizeof cfg);
@@ -86,10 +96,19 @@ int main(int argc, char **argv)
             if (sscanf(argv[++a], "%d:%d", &drop_cam, &drop_perc) != 2) {
                 return fail("bad --drop-perc", 0);
             }
-        } else if (strcmp(argv[a], "--disconnect") == 0 && a + 1 < argc) {
-            if (sscanf(argv[++a], "%d:%u", &disc_cam, &disc_set) != 2) {
+        } else if (strcmp(argv[a], "--disconnect") == 0 && a + 1 < argc && nf < MAXF) {
+            if (sscanf(argv[++a], "%d:%u", &fault[nf].cam, &fault[nf].start) != 2) {
                 return fail("bad --disconnect", 0);
             }
+            nf++;
+        } else if (strcmp(argv[a], "--stall") == 0 && a + 1 < argc && nf < MAXF) {
+            unsigned count;
+            if (sscanf(argv[++a], "%d:%u:%u", &fault[nf].cam, &fault[nf].start, &count) != 3) {
+                return fail("bad --stall", 0);
+            }
+            fault[nf].stall = 1;
+            fault[nf].end = fault[nf].start + count;
+            nf++;
         } else if (argv[a][0] != '-' && cfg.n_cams < RP_MAX_CAMS) {
             snprintf(cfg.cam[cfg.n_cams].device, RP_HAL_PATH_MAX, "%s", argv[a]);
             cfg.n_cams++;
@@ -99,7 +118,13 @@ int main(int argc, char **argv)
         }
     }
     const uint8_t n = cfg.n_cams;
-    if (drop_cam >= n || disc_cam >= n || (disc_cam >= 0 && disc_cam == drop_cam)) {
+    for (unsigned j = 0; j < nf; j++) {
+        if (fault[j].cam < 0 || fault[j].cam >= n || fault[j].cam == drop_cam ||
+            (j == 1 && fault[1].cam == fault[0].cam)) {
+            return fail("fault camera out of range or used twice", 0);
+        }
+    }
+    if (drop_cam >= n) {
         return fail("fault camera out of range", 0);
     }
     if (drop_cam >= 0 && set_ctrl(cfg.cam[drop_cam].device, "Percentage of Dropped Buffers",
@@ -138,21 +163,39 @@ int main(int argc, char **argv)
     rp_hal_set_t set;
     int rc = 0;
     uint32_t drops_before = 0;
-    unsigned gone_sets = 0, back_set = 0;
+    unsigned acted = 0; /* bit 2j: fault j started, bit 2j+1: stall j lifted */
     while (got < n_sets && rc == 0) {
-        if (disc_cam >= 0 && got == disc_set && gone_sets == 0) {
-            if (set_ctrl(cfg.cam[disc_cam].device, "Disconnect", 0) != 0) {
-                rc = fail("cannot press vivid's 'Disconnect'", got);
-                break;
+        for (unsigned j = 0; j < nf && rc == 0; j++) {
+            const char *dev = cfg.cam[fault[j].cam].device;
+            if (got == fault[j].start && !(acted & (1u << (2 * j)))) {
+                acted |= 1u << (2 * j);
+                const int r = fault[j].stall ? set_ctrl(dev, "Percentage of Dropped Buffers", 100)
+                                             : set_ctrl(dev, "Disconnect", 0);
+                if (r != 0) {
+                    rc = fail("cannot inject the fault through vivid's controls", got);
+                }
+                printf("%s cam%d before set %u\n", fault[j].stall ? "stalled" : "unplugged",
+                       fault[j].cam, got);
             }
-            printf("disconnected cam%d before set %u\n", disc_cam, got);
+            if (fault[j].stall && got == fault[j].end && !(acted & (2u << (2 * j)))) {
+                acted |= 2u << (2 * j);
+                if (set_ctrl(dev, "Percentage of Dropped Buffers", 0) != 0) {
+                    rc = fail("cannot lift the stall", got);
+                }
+                printf("cam%d delivers again from set %u\n", fault[j].cam, got);
+            }
+        }
+        if (rc != 0) {
+            break;
         }
         st = rp_hal_grab(src, &set);
         const int64_t now = rp_hal_now_us();
         if (st == RP_HAL_E_TIMEOUT) {
             printf("timeout: %s\n", rp_hal_errmsg(src));
-            if (++timeouts > 2) {
-                rc = fail("more than 2 grab timeouts", got);
+            /* A starved guest (TCG on a busy host) can deliver so late that no set forms
+             * within timeout_ms now and then: tolerated, but not often. */
+            if (++timeouts > 2 + n_sets / 4) {
+                rc = fail("grab timed out in more than a quarter of the sets", got);
             }
             continue;
         }
@@ -169,33 +212,36 @@ int main(int argc, char **argv)
             rc = fail("set time not increasing", got);
             break;
         }
-        /* The unplugged camera: GONE | MISSING from the first set after the disconnect until
-         * the HAL's retry reopens it (vivid registers the device again once its last user has
-         * closed it, like a camera plugged back in), then present again. */
-        int gone_now = 0;
-        if (disc_cam >= 0 && got >= disc_set) {
-            const rp_hal_frame_t *f = &set.cam[disc_cam];
+        /* A faulty camera: GONE | MISSING (no image) soon after the fault, until the HAL's
+         * retry has reopened it, then present again. */
+        uint8_t skip[RP_MAX_CAMS] = {0};
+        for (unsigned j = 0; j < nf && rc == 0; j++) {
+            if (got < fault[j].start) {
+                continue;
+            }
+            const rp_hal_frame_t *f = &set.cam[fault[j].cam];
             const int gone = f->flags == (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE) &&
                              f->img.data == NULL;
-            if (gone && back_set == 0) {
-                gone_sets++;
-                gone_now = 1;
-            } else if (!gone && gone_sets > 0 && back_set == 0) {
-                back_set = got;
-                printf("cam%d back in set %u after %u sets without it\n", disc_cam, got,
-                       gone_sets);
-            } else if (!gone && gone_sets == 0) {
-                rc = fail("unplugged camera still in the set", got);
-                break;
+            if (gone && fault[j].back_set == 0) {
+                fault[j].gone_sets++;
+                skip[fault[j].cam] = 1;
+            } else if (!gone && fault[j].gone_sets > 0 && fault[j].back_set == 0) {
+                fault[j].back_set = got;
+                printf("cam%d back in set %u after %u sets without it\n", fault[j].cam, got,
+                       fault[j].gone_sets);
+            } else if (!gone && fault[j].gone_sets == 0 && ++fault[j].present_after > 2) {
+                rc = fail("faulty camera still in the sets", got);
             } else if (gone) {
                 rc = fail("camera gone again after coming back", got);
-                break;
             }
+        }
+        if (rc != 0) {
+            break;
         }
         int64_t lo = INT64_MAX, hi = INT64_MIN;
         for (uint8_t i = 0; i < n && rc == 0; i++) {
             const rp_hal_frame_t *f = &set.cam[i];
-            if (gone_now && i == disc_cam) {
+            if (skip[i]) {
                 continue;
             }
             if (f->flags & (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE)) {
@@ -283,11 +329,12 @@ int main(int argc, char **argv)
                       got);
         }
     }
-    if (rc == 0 && disc_cam >= 0) {
-        printf("unplugged cam%d: %u sets without it, back in set %u\n", disc_cam, gone_sets,
-               back_set);
-        if (gone_sets == 0 || back_set == 0) {
-            rc = fail("the unplugged camera was not reported GONE, or never came back", got);
+    for (unsigned j = 0; j < nf && rc == 0; j++) {
+        printf("%s cam%d before set %u: %u sets without it, back in set %u\n",
+               fault[j].stall ? "stalled" : "unplugged", fault[j].cam, fault[j].start,
+               fault[j].gone_sets, fault[j].back_set);
+        if (fault[j].gone_sets == 0 || fault[j].back_set == 0) {
+            rc = fail("a faulty camera was not reported GONE, or never came back", got);
         }
     }
     (void)rp_hal_stop(src);

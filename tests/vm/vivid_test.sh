@@ -2,7 +2,7 @@
 # tests/vm/vivid_test.sh - the V4L2 source against a real kernel driver: boots Debian's kernel
 # under qemu with a small initramfs, loads vivid with 4 capture devices and runs the static
 # capture program on all four at once, then the daemon (if given), then the capture again with
-# faults injected through vivid's controls (dropped frames, a camera unplugged mid-run and back); results
+# faults injected through vivid's controls (dropped frames, a camera unplugged and back, a camera stalled and back); results
 # come back over the second serial port. The exit code is the test result (0 pass, 1 fail, 2 cannot run).
 #
 #   tests/vm/vivid_test.sh VMDIR CAPTURE [DAEMON CONFIG]
@@ -118,8 +118,8 @@ run_daemon() {
   echo "daemon_lcm_log_bytes=\$(wc -c < /tmp/rigpose.lcmlog 2>/dev/null || echo 0)" > \$out
 }
 $DAEMON_CMD
-echo "guest: faults: 50 % of cam1's frames dropped by the driver, cam3 unplugged before set 20 and plugged back" > \$out
-/bin/vivid_capture --sets 60 --drop-perc 1:50 --disconnect 3:20 /dev/video0 /dev/video1 /dev/video2 /dev/video3 > \$out 2>&1
+echo "guest: faults: 50 % of cam1's frames dropped by the driver; cam3 unplugged before set 20 and plugged back; cam2 stalled (no frames) before set 60 for 20 sets" > \$out
+/bin/vivid_capture --sets 100 --drop-perc 1:50 --disconnect 3:20 --stall 2:60:20 /dev/video0 /dev/video1 /dev/video2 /dev/video3 > \$out 2>&1
 echo "fault_exit=\$?" > \$out
 echo "guest: done" > \$out
 poweroff -f
