@@ -13,7 +13,6 @@
 #include "rp_test.h"
 #include "rigpose/rp_frame.h"
 #include "rigpose/rp_rot.h"
-#include "rigpose/rp_vo_gc.h"
 #include "rp_sim.h"
 
 typedef struct {
@@ -36,21 +35,13 @@ typedef struct {
     uint32_t flags_or; /* union of the estimates' flags */
 } simfx_score_t;
 
-/* The simulator's configuration of gc (as rigpose-sim runs it): cam1..cam4, new features at
- * the shell's mid radius along their rays. */
+/* The simulator's configuration of gc (rp_sim_gc_cfg) at noise_px. */
 static inline rp_vo_gc_cfg_t simfx_gc_cfg(double noise_px)
 {
-    rp_vo_gc_cfg_t c = rp_vo_gc_default_cfg();
-    c.n_cams = 4;
-    c.cams[0] = RP_SIM_CAM1;
-    c.cams[1] = RP_SIM_CAM2;
-    c.cams[2] = RP_SIM_CAM3;
-    c.cams[3] = RP_SIM_CAM4;
-    c.init_depth_m = RP_C(0.8335);
-    c.init_depth_sigma_m = RP_C(0.15);
-    c.init_on_sphere = 1;
-    c.ekf.sigma_px = noise_px > 0 ? (rp_real)noise_px : RP_C(0.01);
-    return c;
+    rp_sim_cfg_t sim;
+    rp_sim_default_cfg(&sim);
+    sim.noise_px = noise_px;
+    return rp_sim_gc_cfg(&sim);
 }
 
 /* A zeroed fixture of `size` bytes whose first member is a simfx_t, with run `run` (seed 11)

@@ -51,6 +51,16 @@ static uint32_t probe(const rp_idmap_t *m, uint32_t id)
     return i;
 }
 
+/* 1 and its cell in *cell if id is held, else 0. */
+static int held_at(const rp_idmap_t *m, uint32_t id, uint32_t *cell)
+{
+    if (id == RP_IDMAP_EMPTY) {
+        return 0;
+    }
+    *cell = probe(m, id);
+    return m->cell_id[*cell] == id;
+}
+
 rp_status_t rp_idmap_insert(rp_idmap_t *m, uint32_t id, uint8_t group, uint16_t *slot)
 {
     if (!m || !slot || id == RP_IDMAP_EMPTY || group >= RP_IDMAP_MAX_GROUPS) {
@@ -81,11 +91,8 @@ rp_status_t rp_idmap_find(const rp_idmap_t *m, uint32_t id, uint16_t *slot)
     if (!m || !slot) {
         return RP_E_ARG;
     }
-    if (id == RP_IDMAP_EMPTY) {
-        return RP_E_NOT_FOUND;
-    }
-    uint32_t i = probe(m, id);
-    if (m->cell_id[i] != id) {
+    uint32_t i;
+    if (!held_at(m, id, &i)) {
         return RP_E_NOT_FOUND;
     }
     *slot = m->cell_slot[i];
@@ -125,11 +132,8 @@ rp_status_t rp_idmap_remove(rp_idmap_t *m, uint32_t id)
     if (!m) {
         return RP_E_ARG;
     }
-    if (id == RP_IDMAP_EMPTY) {
-        return RP_E_NOT_FOUND;
-    }
-    uint32_t i = probe(m, id);
-    if (m->cell_id[i] != id) {
+    uint32_t i;
+    if (!held_at(m, id, &i)) {
         return RP_E_NOT_FOUND;
     }
     remove_cell(m, i);

@@ -148,6 +148,23 @@ struct MethodStats {
         }
         ++err_frames;
     }
+    /* One frame of a rigpose estimator: its time; from frame 1 on its error, the features its
+     * update used in cams, and a failure if it did not track. */
+    void add_rigpose_frame(double us, uint32_t j, rp_status_t st, const rp_estimate_t &est,
+                           const std::vector<int> &cams, const double truth[6])
+    {
+        time_us += us;
+        ++timed_frames;
+        if (j == 0) return;
+        double p[6];
+        for (int i = 0; i < 6; ++i) p[i] = (double)est.p[i];
+        add_error(p, truth);
+        uint32_t used = 0;
+        for (int c : cams) used += est.n_used[c];
+        feats += used;
+        ++feat_frames;
+        if (st != RP_OK || (est.flags & RP_EST_LOST)) ++fails;
+    }
 };
 
 using Clock = std::chrono::steady_clock;
@@ -483,18 +500,7 @@ static int section_stereo4(const BenchOpts &o, Figures &fig)
             rp_estimate_t est;
             Clock::time_point t0 = Clock::now();
             st = rp_vo_stereo_step(vo.get(), fs.get(), &est);
-            s_rp.time_us += us_since(t0);
-            ++s_rp.timed_frames;
-            if (j > 0) {
-                double p[6];
-                for (int i = 0; i < 6; ++i) p[i] = (double)est.p[i];
-                s_rp.add_error(p, truth);
-                uint32_t used = 0;
-                for (int c : cams) used += est.n_used[c];
-                s_rp.feats += used;
-                ++s_rp.feat_frames;
-                if (st != RP_OK || (est.flags & RP_EST_LOST)) ++s_rp.fails;
-            }
+            s_rp.add_rigpose_frame(us_since(t0), j, st, est, cams, truth);
 
             /* peers: frame 0 builds their structure (timed, charged to both); the pose at
              * frame 0 is the world by definition */
@@ -633,17 +639,7 @@ static int section_gc(const BenchOpts &o, Figures &fig)
     cfg.n_frames = o.frames;
     cfg.noise_px = o.noise_px;
 
-    /* as rigpose-sim runs gc: features start at the shell's mid radius along their rays */
-    rp_vo_gc_cfg_t gcfg = rp_vo_gc_default_cfg();
-    gcfg.n_cams = 4;
-    gcfg.cams[0] = RP_SIM_CAM1;
-    gcfg.cams[1] = RP_SIM_CAM2;
-    gcfg.cams[2] = RP_SIM_CAM3;
-    gcfg.cams[3] = RP_SIM_CAM4;
-    gcfg.init_depth_m = (rp_real)((0.667 + 1.0) / 2.0);
-    gcfg.init_depth_sigma_m = (rp_real)0.15;
-    gcfg.init_on_sphere = 1;
-    gcfg.ekf.sigma_px = (rp_real)o.noise_px;
+    const rp_vo_gc_cfg_t gcfg = rp_sim_gc_cfg(&cfg); /* as rigpose-sim runs gc */
     const std::vector<int> cams = {RP_SIM_CAM1, RP_SIM_CAM2, RP_SIM_CAM3, RP_SIM_CAM4};
     const double ransac_thr_px =
         o.opengv_thr_px > 0.0 ? o.opengv_thr_px : std::max(2.0, 8.0 * o.noise_px);
@@ -704,18 +700,7 @@ static int section_gc(const BenchOpts &o, Figures &fig)
             rp_estimate_t est;
             Clock::time_point t0 = Clock::now();
             st = rp_vo_gc_step(vo.get(), fs.get(), &est);
-            s_rp.time_us += us_since(t0);
-            ++s_rp.timed_frames;
-            if (j > 0) {
-                double p[6];
-                for (int i = 0; i < 6; ++i) p[i] = (double)est.p[i];
-                s_rp.add_error(p, truth);
-                uint32_t used = 0;
-                for (int c : cams) used += est.n_used[c];
-                s_rp.feats += used;
-                ++s_rp.feat_frames;
-                if (st != RP_OK || (est.flags & RP_EST_LOST)) ++s_rp.fails;
-            }
+            s_rp.add_rigpose_frame(us_since(t0), j, st, est, cams, truth);
         }
         rp_sim_run_free(&sr);
     }

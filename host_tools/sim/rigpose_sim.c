@@ -124,20 +124,14 @@ static rp_status_t stereo_step(void *state, const rp_frameset_t *fs, rp_estimate
     return rp_vo_stereo_step((rp_vo_stereo_t *)state, fs, est);
 }
 
-/* gc: the generalised camera over the four single cameras (rp_vo_gc.h). New features start at
- * the shell's mid radius (0.667 + 1) / 2 m along their rays, +- 0.15 m. */
+/* gc: the generalised camera over the four single cameras (rp_vo_gc.h), configured as
+ * rp_sim_gc_cfg says (new features at the shell's mid radius along their rays). */
 static rp_status_t gc_init(void *state, const rp_rig_t *rig, const method_opts_t *o)
 {
-    rp_vo_gc_cfg_t cfg = rp_vo_gc_default_cfg();
-    cfg.n_cams = 4;
-    cfg.cams[0] = RP_SIM_CAM1;
-    cfg.cams[1] = RP_SIM_CAM2;
-    cfg.cams[2] = RP_SIM_CAM3;
-    cfg.cams[3] = RP_SIM_CAM4;
-    cfg.init_depth_m = (rp_real)((0.667 + 1.0) / 2.0);
-    cfg.init_depth_sigma_m = (rp_real)0.15;
-    cfg.init_on_sphere = 1; /* the scene surrounds the rig: depth measured along the ray */
-    cfg.ekf.sigma_px = (rp_real)(o->noise_px > 0.01 ? o->noise_px : 0.01);
+    rp_sim_cfg_t sim;
+    rp_sim_default_cfg(&sim);
+    sim.noise_px = o->noise_px;
+    rp_vo_gc_cfg_t cfg = rp_sim_gc_cfg(&sim);
     if (o->ekf_iterations) {
         cfg.ekf.iterations = (uint8_t)o->ekf_iterations;
     }

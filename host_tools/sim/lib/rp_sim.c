@@ -143,6 +143,21 @@ void rp_sim_default_cfg(rp_sim_cfg_t *cfg)
     cfg->cam4 = rp_sim_paper_place(0);
 }
 
+rp_vo_gc_cfg_t rp_sim_gc_cfg(const rp_sim_cfg_t *cfg)
+{
+    rp_vo_gc_cfg_t c = rp_vo_gc_default_cfg();
+    c.n_cams = 4;
+    c.cams[0] = RP_SIM_CAM1;
+    c.cams[1] = RP_SIM_CAM2;
+    c.cams[2] = RP_SIM_CAM3;
+    c.cams[3] = RP_SIM_CAM4;
+    c.init_depth_m = (rp_real)((cfg->r_in + cfg->r_out) / 2.0);
+    c.init_depth_sigma_m = (rp_real)0.15;
+    c.init_on_sphere = 1; /* the scene surrounds the rig: depth measured along the ray */
+    c.ekf.sigma_px = (rp_real)(cfg->noise_px > 0.01 ? cfg->noise_px : 0.01);
+    return c;
+}
+
 rp_sim_place_t rp_sim_paper_place(int right)
 {
     const double s = 0.05 * sqrt(3.0);

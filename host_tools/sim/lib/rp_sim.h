@@ -29,6 +29,7 @@ extern "C" {
 
 #include "rigpose/rp_frame.h"
 #include "rigpose/rp_rig.h"
+#include "rigpose/rp_vo_gc.h"
 
 enum { RP_SIM_CAM1 = 0, RP_SIM_CAM2, RP_SIM_CAM3, RP_SIM_CAM4, RP_SIM_CAM1B, RP_SIM_CAM3B,
        RP_SIM_NCAMS };
@@ -59,6 +60,11 @@ void rp_sim_default_cfg(rp_sim_cfg_t *cfg);
 
 /* The six-camera rig of the protocol, cam2 and cam4 where cfg places them. */
 void rp_sim_make_rig(const rp_sim_cfg_t *cfg, rp_rig_t *rig);
+
+/* gc as the simulator, its tests and the benchmark run it: cam1..cam4; new features start at
+ * the shell's mid radius (r_in + r_out) / 2 along their rays, +- 0.15 m; the filter's pixel
+ * sigma is cfg's noise (at least 0.01 px: the filter needs sigma > 0). */
+rp_vo_gc_cfg_t rp_sim_gc_cfg(const rp_sim_cfg_t *cfg);
 
 /* The paper's placement of cam2 (right = 1) or cam4 (right = 0); 0.0866 is exactly
  * 0.1 cos(30 deg), so every camera is 0.1 m from cam1. */
