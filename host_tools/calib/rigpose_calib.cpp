@@ -13,7 +13,10 @@
  *       simultaneous images, e.g. recorded by rigpose-log): intrinsics per column; each --pair
  *       (overlapping cameras seeing the same board) by stereo calibration; every other camera
  *       by hand-eye calibration against cam0 from its own static board seen over a common
- *       rig motion (rotate the rig about at least two axes).
+ *       rig motion (rotate the rig about at least two axes). --intrinsics FILE.yaml takes the
+ *       cameras' intrinsics from an earlier calibration (e.g. each camera's `mono` run merged, or
+ *       any rigpose configuration with the same camera order) instead of estimating them from
+ *       these views: a static board seen from a rig that turns a little gives weak intrinsics.
  *
  * Options: --board WxH (inner corners, default 9x6), --square M (metres, default 0.025),
  * --fix-aspect (fx / fy fixed to 1), --out FILE.yaml, --source v4l2|replay (default v4l2; rig
@@ -45,6 +48,7 @@ void usage(FILE *out)
                  "usage: rigpose-calib mono   [opts] IMAGE...\n"
                  "       rigpose-calib stereo [opts] --left IMAGE... --right IMAGE...\n"
                  "       rigpose-calib rig    [opts] --frames FRAMES.CSV [--pair COLA,COLB]...\n"
+                 "                            [--intrinsics FILE.yaml]\n"
                  "opts:  --board WxH (inner corners, 9x6)  --square M (0.025)  --fix-aspect\n"
                  "       --out FILE.yaml  --source v4l2|replay  --names NAME,NAME,...\n");
 }
@@ -88,7 +92,7 @@ struct Args {
     std::string mode;
     rpc::Board board;
     rpc::IntrinsicsOpts iopts;
-    std::string out, source = "v4l2", frames;
+    std::string out, source = "v4l2", frames, intrinsics;
     std::vector<std::string> names, images, left, right, pairs;
 };
 
@@ -127,6 +131,8 @@ bool parse(int argc, char **argv, Args *a)
             }
         } else if (s == "--names" && has_val) {
             a->names = split(argv[++i], ',');
+        } else if (s == "--intrinsics" && has_val) {
+            a->intrinsics = argv[++i];
         } else if (s == "--frames" && has_val) {
             a->frames = argv[++i];
         } else if (s == "--pair" && has_val) {
@@ -172,9 +178,13 @@ bool calib_camera(const std::string &cam, const std::vector<rpc::View> &views, c
                     views[static_cast<size_t>(out->used[i])].file.c_str(), out->view_rms_px[i]);
     }
     const rpc::Intrinsics &k = *out;
-    std::printf("%s: %zu of %zu views, %dx%d: fx %.3f fy %.3f cx %.3f cy %.3f  "
+    size_t n_files = 0; /* empty views stand for a missing partner / row: not files */
+    for (const rpc::View &v : views) {
+        n_files += v.file.empty() ? 0u : 1u;
+    }
+    std::printf("%s: %zu of %zu images, %dx%d: fx %.3f fy %.3f cx %.3f cy %.3f  "
                 "k1 %.5f k2 %.5f p1 %.6f p2 %.6f k3 %.5f  RMS %.4f px\n",
-                cam.c_str(), k.used.size(), views.size(), k.size.width, k.size.height, k.K(0, 0),
+                cam.c_str(), k.used.size(), n_files, k.size.width, k.size.height, k.K(0, 0),
                 k.K(1, 1), k.K(0, 2), k.K(1, 2), k.dist[0], k.dist[1], k.dist[2], k.dist[3],
                 k.dist[4], k.rms_px);
     return true;
@@ -300,6 +310,45 @@ int run_stereo(const Args &a)
     return finish(a, cams, {{0, 1}}, "");
 }
 
+/* Intrinsics of every camera, in order, from a rigpose configuration file as rigpose-calib and
+ * rigpose-render write it (one `width:`, `height:`, `intrinsics: [...]`, optional
+ * `distortion: [...]` line per camera). */
+bool read_intrinsics(const std::string &path, std::vector<rpc::Intrinsics> *out)
+{
+    std::ifstream in(path);
+    if (!in) {
+        std::fprintf(stderr, "rigpose-calib: cannot read %s\n", path.c_str());
+        return false;
+    }
+    std::string line;
+    int w = 0, h = 0;
+    while (std::getline(in, line)) {
+        const size_t b = line.find('[');
+        double v[5] = {0, 0, 0, 0, 0};
+        if (line.find("width:") != std::string::npos) {
+            w = std::atoi(line.c_str() + line.find(':') + 1);
+        } else if (line.find("height:") != std::string::npos) {
+            h = std::atoi(line.c_str() + line.find(':') + 1);
+        } else if (line.find("intrinsics:") != std::string::npos && b != std::string::npos &&
+                   std::sscanf(line.c_str() + b, "[%lf, %lf, %lf, %lf]", v, v + 1, v + 2, v + 3) == 4) {
+            rpc::Intrinsics k;
+            k.K = cv::Matx33d(v[0], 0, v[2], 0, v[1], v[3], 0, 0, 1);
+            k.size = cv::Size(w, h);
+            out->push_back(k);
+        } else if (line.find("distortion:") != std::string::npos && b != std::string::npos &&
+                   !out->empty() &&
+                   std::sscanf(line.c_str() + b, "[%lf, %lf, %lf, %lf, %lf]", v, v + 1, v + 2, v + 3,
+                               v + 4) == 5) {
+            out->back().dist.assign(v, v + 5);
+        }
+    }
+    if (out->empty()) {
+        std::fprintf(stderr, "rigpose-calib: %s: no `intrinsics: [fx, fy, cx, cy]` line\n", path.c_str());
+        return false;
+    }
+    return true;
+}
+
 /* frames.csv of a replay folder: header utime_us,cam0,... then rows; paths relative to it. */
 bool read_frames(const std::string &path, std::vector<std::string> *cols,
                  std::vector<std::vector<std::string>> *files)
@@ -366,6 +415,12 @@ int run_rig(const Args &a)
         }
         pairs.emplace_back(ia, ib);
     }
+    std::vector<rpc::Intrinsics> known;
+    if (!a.intrinsics.empty() && (!read_intrinsics(a.intrinsics, &known) || known.size() != n)) {
+        std::fprintf(stderr, "rigpose-calib: --intrinsics %s: want the intrinsics of %zu cameras\n",
+                     a.intrinsics.c_str(), n);
+        return 2;
+    }
     std::vector<rpc::CamOut> cams(n);
     std::vector<std::vector<rpc::View>> views(n);
     for (size_t k = 0; k < n; ++k) {
@@ -381,7 +436,11 @@ int run_rig(const Args &a)
                             views[k].back().why.c_str());
             }
         }
-        if (!calib_camera(cams[k].name, views[k], size, a, &cams[k].intr)) {
+        Args ak = a;
+        if (!known.empty()) {
+            ak.iopts.fixed = &known[k];
+        }
+        if (!calib_camera(cams[k].name, views[k], size, ak, &cams[k].intr)) {
             return 1;
         }
     }

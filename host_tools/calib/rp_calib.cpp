@@ -125,7 +125,30 @@ bool calibrate_intrinsics(const std::vector<View> &views, const Board &board, cv
     cv::Mat K = cv::Mat::eye(3, 3, CV_64F), D;
     std::vector<cv::Mat> rv, tv;
     try {
-        r.rms_px = cv::calibrateCamera(obj, img, size, K, D, rv, tv, flags);
+        if (opts.fixed) {
+            if (opts.fixed->size != size) {
+                *why = "the given intrinsics are for another image size";
+                return false;
+            }
+            K = cv::Mat(opts.fixed->K).clone();
+            D = cv::Mat(opts.fixed->dist).clone();
+            double s2 = 0.0;
+            for (size_t i = 0; i < img.size(); ++i) {
+                cv::Mat r1, t1;
+                cv::solvePnP(obj[i], img[i], K, D, r1, t1);
+                rv.push_back(r1);
+                tv.push_back(t1);
+                std::vector<cv::Point2f> proj;
+                cv::projectPoints(obj[i], r1, t1, K, D, proj);
+                for (size_t j = 0; j < proj.size(); ++j) {
+                    const cv::Point2f d = proj[j] - img[i][j];
+                    s2 += static_cast<double>(d.dot(d));
+                }
+            }
+            r.rms_px = std::sqrt(s2 / static_cast<double>(img.size() * obj[0].size()));
+        } else {
+            r.rms_px = cv::calibrateCamera(obj, img, size, K, D, rv, tv, flags);
+        }
     } catch (const cv::Exception &e) {
         *why = std::string("calibrateCamera failed: ") + e.what();
         return false;

@@ -49,9 +49,12 @@ struct Pose {
     Pose operator*(const Pose &b) const;
 };
 
+struct Intrinsics;
+
 struct IntrinsicsOpts {
     bool fix_aspect = false;   /* fx / fy fixed to the initial guess's (1) */
     bool zero_tangential = false;
+    const Intrinsics *fixed = nullptr; /* known K and distortion: only the board poses (solvePnP) */
 };
 
 struct Intrinsics {
@@ -64,7 +67,8 @@ struct Intrinsics {
     std::vector<Pose> board_in_cam;       /* per used view */
 };
 
-/* Calibrates from the views with a board (at least 3). False with a reason otherwise. */
+/* Calibrates from the views with a board (at least 3), or with opts.fixed only finds the board
+ * poses and reprojection errors. False with a reason otherwise. */
 bool calibrate_intrinsics(const std::vector<View> &views, const Board &board, cv::Size size,
                           const IntrinsicsOpts &opts, Intrinsics *out, std::string *why);
 

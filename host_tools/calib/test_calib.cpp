@@ -26,6 +26,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "rp_calib.hpp"
 
@@ -335,6 +336,128 @@ static void test_hand_eye()
           "hand-eye refuses fewer than 3 sets, with a reason");
 }
 
+/* The whole rig through the program: synthetic chessboard images of five cameras (the paper's
+ * cam1..cam4, each with its own board, and cam1's stereo partner sharing cam1's board) over 20
+ * rig poses, rendered by warping a board texture (fx = fy = 600, 640x480, no distortion);
+ * `rigpose-calib rig --pair cam0,cam4 --intrinsics` (the intrinsics known from earlier
+ * calibrations) must return every camera's position and rotation in cam1's frame. */
+static void test_rig_program()
+{
+    const char *bin = std::getenv("RP_CALIB_BIN");
+    if (!bin) {
+        bin = "build/release/rigpose-calib";
+    }
+    const std::string dir = work_dir() + "/rig";
+    if (std::system(("rm -rf '" + dir + "' && mkdir -p '" + dir + "'").c_str()) != 0) {
+        check(false, "rig folder created");
+        return;
+    }
+    const double sq = 0.03, ppsq = 40.0; /* square side, m; texture px per square */
+    const cv::Size inner(9, 6);
+    cv::Mat tex((inner.height + 3) * 40, (inner.width + 3) * 40, CV_8U, cv::Scalar(255));
+    for (int r = 0; r < inner.height + 1; ++r) {
+        for (int c = 0; c < inner.width + 1; ++c) {
+            if ((r + c) % 2 == 0) {
+                tex(cv::Rect((c + 1) * 40, (r + 1) * 40, 40, 40)).setTo(cv::Scalar(0));
+            }
+        }
+    }
+    /* texture px (pixel centres) -> board plane (m): the first inner corner at the origin */
+    const cv::Matx33d A(sq / ppsq, 0, -(2 * ppsq - 0.5) * sq / ppsq, 0, sq / ppsq,
+                        -(2 * ppsq - 0.5) * sq / ppsq, 0, 0, 1);
+    const cv::Matx33d K(600, 0, 319.5, 0, 600, 239.5, 0, 0, 1);
+    std::vector<rpc::Pose> cams(5);
+    cams[1].R = cv::Matx33d(0, 0, 1, 0, 1, 0, -1, 0, 0);
+    cams[1].t = cv::Vec3d(0.0866025403784439, 0, -0.05);
+    cams[2].R = cv::Matx33d(-1, 0, 0, 0, 1, 0, 0, 0, -1);
+    cams[2].t = cv::Vec3d(0, 0, -0.1);
+    cams[3].R = cv::Matx33d(0, 0, -1, 0, 1, 0, 1, 0, 0);
+    cams[3].t = cv::Vec3d(-0.0866025403784439, 0, -0.05);
+    cams[4].t = cv::Vec3d(0.1, 0, 0);
+    /* each board 0.8 m in front of its camera at the start (cam1b shares cam1's) */
+    std::vector<rpc::Pose> boards(4);
+    for (int k = 0; k < 4; ++k) {
+        boards[static_cast<size_t>(k)].R = cams[static_cast<size_t>(k)].R;
+        boards[static_cast<size_t>(k)].t =
+            cams[static_cast<size_t>(k)].R * cv::Vec3d(-4 * sq, -2.5 * sq, 0.8) + cams[static_cast<size_t>(k)].t;
+    }
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::ofstream csv(dir + "/frames.csv");
+    csv << "utime_us,cam0,cam1,cam2,cam3,cam4\n";
+    for (int i = 0; i < 20; ++i) {
+        cv::Mat Rm;
+        cv::Rodrigues(cv::Vec3d(0.25 * u(rng), 0.25 * u(rng), 0.25 * u(rng)), Rm);
+        rpc::Pose rig;
+        rig.R = cv::Matx33d(Rm);
+        rig.t = cv::Vec3d(0.04 * u(rng), 0.04 * u(rng), 0.04 * u(rng));
+        csv << i * 33333;
+        for (int k = 0; k < 5; ++k) {
+            const rpc::Pose b = (rig * cams[static_cast<size_t>(k)]).inv() * boards[static_cast<size_t>(k == 4 ? 0 : k)];
+            const cv::Matx33d P(b.R(0, 0), b.R(0, 1), b.t[0], b.R(1, 0), b.R(1, 1), b.t[1], b.R(2, 0),
+                                b.R(2, 1), b.t[2]);
+            cv::Mat img;
+            cv::warpPerspective(tex, img, cv::Mat(K * P * A), cv::Size(640, 480), cv::INTER_AREA,
+                                cv::BORDER_CONSTANT, cv::Scalar(160));
+            char name[32];
+            std::snprintf(name, sizeof name, "c%d_%02d.png", k, i);
+            cv::imwrite(dir + "/" + name, img);
+            csv << "," << name;
+        }
+        csv << "\n";
+    }
+    csv.close();
+    /* the cameras' intrinsics as an earlier per-camera calibration would give them */
+    std::ofstream known(dir + "/intrinsics.yaml");
+    for (int k = 0; k < 5; ++k) {
+        known << "  - name: c" << k << "\n    width: 640\n    height: 480\n"
+              << "    intrinsics: [600, 600, 319.5, 239.5]\n    distortion: [0, 0, 0, 0, 0]\n";
+    }
+    known.close();
+    const std::string out = dir + "/rig.yaml", log = dir + "/calib.out";
+    const std::string cmd = std::string(bin) + " rig --square 0.03 --frames '" + dir +
+                            "/frames.csv' --pair cam0,cam4 --intrinsics '" + dir +
+                            "/intrinsics.yaml' --out '" + out + "' > '" + log + "' 2>&1";
+    const int rc = std::system(cmd.c_str());
+    check(rc == 0, "rigpose-calib rig on the synthetic rig: exit 0");
+    /* positions and rotations, in camera order, from the YAML */
+    std::ifstream y(out), l(log);
+    std::string line;
+    while (std::getline(l, line)) {
+        if (line.find("view RMS") == std::string::npos) {
+            std::printf("  | %s\n", line.c_str());
+        }
+    }
+    std::vector<cv::Vec3d> pos;
+    std::vector<cv::Matx33d> rot;
+    while (std::getline(y, line)) {
+        const size_t b = line.find('[');
+        if (line.find("position:") != std::string::npos && b != std::string::npos) {
+            cv::Vec3d p;
+            std::sscanf(line.c_str() + b, "[%lf, %lf, %lf]", &p[0], &p[1], &p[2]);
+            pos.push_back(p);
+        } else if (line.find("rotation:") != std::string::npos && b != std::string::npos) {
+            cv::Matx33d R;
+            double *r = R.val;
+            std::sscanf(line.c_str() + b, "[%lf, %lf, %lf, %lf, %lf, %lf, %lf, %lf, %lf]", r, r + 1,
+                        r + 2, r + 3, r + 4, r + 5, r + 6, r + 7, r + 8);
+            rot.push_back(R);
+        }
+    }
+    bool ok = pos.size() == 5 && rot.size() == 5;
+    double worst_mm = 0.0, worst_deg = 0.0;
+    for (size_t k = 0; ok && k < 5; ++k) {
+        cv::Mat dr;
+        cv::Rodrigues(cv::Mat(rot[k] * cams[k].R.t()), dr);
+        const double e_mm = cv::norm(pos[k] - cams[k].t) * 1e3, e_deg = cv::norm(dr) * 180.0 / CV_PI;
+        std::printf("  cam%zu: position error %.2f mm, rotation error %.3f deg\n", k + 1, e_mm, e_deg);
+        worst_mm = std::max(worst_mm, e_mm);
+        worst_deg = std::max(worst_deg, e_deg);
+    }
+    check(ok && worst_mm < 8.0 && worst_deg < 0.5,
+          "rig extrinsics (hand-eye + bundle adjustment, stereo partner) within 8 mm and 0.5 deg");
+}
+
 int main()
 {
     if (data_file("left01.jpg").empty()) {
@@ -345,6 +468,7 @@ int main()
     test_stereo();
     test_bad_files();
     test_hand_eye();
+    test_rig_program();
     std::printf("%s %d test(s).\n", n_fail ? "[  FAILED  ]" : "[  PASSED  ]", n_fail ? n_fail : n_pass);
     return n_fail ? 1 : 0;
 }
