@@ -23,6 +23,7 @@
  */
 #include <sys/stat.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -186,7 +187,7 @@ int main(int argc, char **argv)
             continue;
         }
         std::printf("%-10s %6zu %12.6f %12.6f %12.6f %12.6f %8.4f %14.6f %14.4f\n", e.name.c_str(),
-                    a.n, a.rmse, a.mean, a.median, a.max, scale, rt.rmse, rr.rmse * 180.0 / M_PI);
+                    a.n, a.rmse, a.mean, a.median, a.max, scale, rt.rmse, rr.rmse * 180.0 / CV_PI);
         if (jf) {
             std::fprintf(jf, "%s\"eval_%s_ate_rmse_m\": %.9g, \"eval_%s_ate_max_m\": %.9g, "
                              "\"eval_%s_rpe_trans_rmse_m\": %.9g, \"eval_%s_rpe_rot_rmse_rad\": %.9g",
