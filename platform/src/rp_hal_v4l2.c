@@ -3,12 +3,14 @@
  *
  * open   each device: capabilities, the best pixel format it offers (GREY, then the planar YUV
  *        formats whose first plane is grey, then YUYV / UYVY, then MJPEG), the configured size
- *        (refused if the driver gives another), the rate (best effort), RP_HAL_V4L2_NBUF mmap
- *        buffers.
- * grab   poll() on every live device; each readable device is drained to its newest frame, which
- *        is converted into the camera's grey buffer and the buffer queued again at once. Frames
- *        are grouped by kernel timestamp (rp_hal_group): a set is complete when every live camera
- *        has a frame within sync_tol_us of the newest. A camera whose device fails (ENODEV: it
+ *        (refused if the driver gives another), the rate (best effort), RP_HAL_V4L2_NBUF (6)
+ *        mmap buffers.
+ * grab   poll() on every live device; each device's ready frames are dequeued and held (up to
+ *        RP_HAL_V4L2_HOLD per camera, the oldest given back when full). Frames are grouped by
+ *        kernel timestamp (rp_hal_group): the newest set in which every live camera has a frame
+ *        within sync_tol_us; frames that no set can use go back to the driver. A set's frames
+ *        stay with the caller until the next grab: GREY and planar YUV images are the driver's
+ *        buffers themselves (zero copy), YUYV / UYVY / MJPEG are converted to grey. A camera whose device fails (ENODEV: it
  *        was unplugged) or that delivers nothing for timeout_ms (stalled) is closed, flagged
  *        GONE | MISSING in every set, and reopened every retry_ms; the other cameras go on. A
  *        reopened camera holds no set back until it delivers a frame (then it rejoins); if it
@@ -31,10 +33,6 @@
 #include <linux/videodev2.h>
 
 #include "rigpose/rp_hal_v4l2.h"
-
-#ifndef RP_HAL_V4L2_NBUF
-#define RP_HAL_V4L2_NBUF 4
-#endif
 
 /* ---- pure parts (rp_hal_v4l2.h) -------------------------------------------------------------- */
 
@@ -134,24 +132,62 @@ uint32_t rp_hal_seq_update(rp_hal_seq_t *s, uint32_t seq)
     return skipped;
 }
 
-uint8_t rp_hal_group(const int64_t t_us[], const uint8_t have[], uint8_t n, int64_t tol_us,
-                     uint8_t in[], int64_t *anchor_us)
+uint8_t rp_hal_group(const int64_t *t_us, const uint8_t *count, uint8_t n, uint8_t stride,
+                     const uint8_t *need, int64_t tol_us, int8_t *pick, int64_t *anchor_us)
 {
-    int64_t anchor = 0;
-    uint8_t any = 0;
+    int64_t best = 0;
+    uint8_t found = 0;
     for (uint8_t i = 0; i < n; i++) {
-        if (have[i] && (!any || t_us[i] > anchor)) {
-            anchor = t_us[i];
+        for (uint8_t k = 0; k < count[i]; k++) {
+            const int64_t a = t_us[(size_t)i * stride + k];
+            uint8_t ok = (uint8_t)(!found || a > best);
+            for (uint8_t j = 0; j < n && ok; j++) {
+                uint8_t has = (uint8_t)!need[j];
+                for (uint8_t m = 0; m < count[j] && !has; m++) {
+                    const int64_t t = t_us[(size_t)j * stride + m];
+                    has = (uint8_t)(t >= a - tol_us && t <= a);
+                }
+                ok = has;
+            }
+            if (ok) {
+                best = a;
+                found = 1;
+            }
+        }
+    }
+    uint8_t picked = 0;
+    for (uint8_t j = 0; j < n; j++) {
+        pick[j] = -1;
+        for (int k = (int)count[j] - 1; k >= 0 && found; k--) {
+            const int64_t t = t_us[(size_t)j * stride + (size_t)k];
+            if (t >= best - tol_us && t <= best) {
+                pick[j] = (int8_t)k;
+                picked++;
+                break;
+            }
+        }
+    }
+    *anchor_us = found ? best : 0;
+    return picked;
+}
+
+uint8_t rp_hal_group_hopeless(const int64_t *t_us, const uint8_t *count, uint8_t n,
+                              uint8_t stride, const uint8_t *need, int64_t tol_us, uint8_t i)
+{
+    int64_t bound = 0; /* frames of camera i older than this are hopeless */
+    uint8_t any = 0;
+    for (uint8_t j = 0; j < n; j++) {
+        if (j != i && need[j] && count[j] > 0) {
+            const int64_t oldest = t_us[(size_t)j * stride];
+            bound = !any || oldest > bound ? oldest : bound;
             any = 1;
         }
     }
-    uint8_t k = 0;
-    for (uint8_t i = 0; i < n; i++) {
-        in[i] = (uint8_t)(have[i] && t_us[i] >= anchor - tol_us);
-        k = (uint8_t)(k + in[i]);
+    uint8_t h = 0;
+    while (any && h < count[i] && t_us[(size_t)i * stride + h] + tol_us < bound) {
+        h++;
     }
-    *anchor_us = anchor;
-    return k;
+    return h;
 }
 
 /* ---- devices --------------------------------------------------------------------------------- */
@@ -171,11 +207,17 @@ typedef struct {
     int64_t retry_at;             /* HAL clock, us */
     int64_t last_frame;           /* HAL clock of the last frame dequeued, us */
     rp_hal_seq_t seq;
-    uint8_t pending;              /* grey holds a frame not delivered yet */
-    int64_t t_us;                 /* its kernel timestamp, us */
-    uint32_t fseq;                /* its sequence number */
+    struct {
+        uint32_t idx;             /* driver buffer */
+        int64_t t_us;             /* kernel timestamp, us */
+        uint32_t seq;             /* driver sequence number */
+        uint32_t used;            /* bytes of image in the buffer */
+    } held[RP_HAL_V4L2_HOLD];     /* frames waiting for a set, oldest first */
+    uint8_t n_held;
+    int out_idx;                  /* buffer of the last delivered set (-1: none), given back
+                                   * at the next grab */
     uint8_t dropped;              /* frames skipped since the last delivered set */
-    uint8_t grey[(size_t)RP_HAL_MAX_W * RP_HAL_MAX_H];
+    uint8_t grey[(size_t)RP_HAL_MAX_W * RP_HAL_MAX_H]; /* converted image (non-grey formats) */
 } v4l2_cam_t;
 
 typedef struct {
@@ -195,6 +237,17 @@ static int xioctl(int fd, unsigned long req, void *arg)
         r = ioctl(fd, req, arg);
     } while (r == -1 && errno == EINTR);
     return r;
+}
+
+/* A capture buffer descriptor for mmap buffer `index`. */
+static struct v4l2_buffer mmap_buf(uint32_t index)
+{
+    struct v4l2_buffer b;
+    memset(&b, 0, sizeof b);
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    b.index = index;
+    return b;
 }
 
 /* Preference among the formats a device offers; 0 = unusable. */
@@ -234,7 +287,8 @@ static void cam_close(v4l2_cam_t *c)
     }
     c->nbuf = 0;
     c->streaming = 0;
-    c->pending = 0;
+    c->n_held = 0;
+    c->out_idx = -1;
     if (c->fd >= 0) {
         (void)close(c->fd);
     }
@@ -344,11 +398,7 @@ static rp_hal_status_t cam_open(v4l2_cam_t *c, char *err)
     }
     c->nbuf = rb.count < RP_HAL_V4L2_NBUF ? rb.count : RP_HAL_V4L2_NBUF;
     for (uint32_t i = 0; i < c->nbuf; i++) {
-        struct v4l2_buffer b;
-        memset(&b, 0, sizeof b);
-        b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        b.memory = V4L2_MEMORY_MMAP;
-        b.index = i;
+        struct v4l2_buffer b = mmap_buf(i);
         if (xioctl(c->fd, VIDIOC_QUERYBUF, &b) != 0) {
             cam_close(c);
             return rp_hal_fail(err, RP_HAL_E_IO, "%s: VIDIOC_QUERYBUF", path);
@@ -367,11 +417,7 @@ static rp_hal_status_t cam_open(v4l2_cam_t *c, char *err)
 static rp_hal_status_t cam_stream_on(v4l2_cam_t *c, char *err)
 {
     for (uint32_t i = 0; i < c->nbuf; i++) {
-        struct v4l2_buffer b;
-        memset(&b, 0, sizeof b);
-        b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        b.memory = V4L2_MEMORY_MMAP;
-        b.index = i;
+        struct v4l2_buffer b = mmap_buf(i);
         if (xioctl(c->fd, VIDIOC_QBUF, &b) != 0) {
             return rp_hal_fail(err, RP_HAL_E_IO, "%s: VIDIOC_QBUF: %s", c->cfg->device,
                                strerror(errno));
@@ -388,31 +434,43 @@ static rp_hal_status_t cam_stream_on(v4l2_cam_t *c, char *err)
     return RP_HAL_OK;
 }
 
-/* A frame's bytes into the camera's grey buffer. */
-static rp_hal_status_t cam_convert(v4l2_cam_t *c, const uint8_t *p, size_t used)
+/* The grey image of a frame of `used` bytes at p: the driver's buffer itself for GREY and the
+ * planar formats (zero copy, stride = bytes per line), else converted into the camera's grey
+ * buffer. RP_HAL_E_FORMAT for a short or corrupt frame. */
+static rp_hal_status_t cam_image(v4l2_cam_t *c, const uint8_t *p, size_t used, rp_image_t *img)
 {
-    const size_t need = (size_t)c->bpl * (c->h - 1u) + (c->fourcc == V4L2_PIX_FMT_YUYV ||
-                                                        c->fourcc == V4L2_PIX_FMT_UYVY
-                                                            ? 2u * c->w : c->w);
+    const int packed = c->fourcc == V4L2_PIX_FMT_YUYV || c->fourcc == V4L2_PIX_FMT_UYVY;
+    const size_t need = (size_t)c->bpl * (c->h - 1u) + (packed ? 2u * c->w : c->w);
+    rp_hal_status_t st;
+    img->w = c->w;
+    img->h = c->h;
+    img->data = c->grey;
+    img->stride = c->w;
+    img->size = (uint32_t)c->w * c->h;
     switch (c->fourcc) {
     case V4L2_PIX_FMT_MJPEG:
     case V4L2_PIX_FMT_JPEG:
-        return rp_hal_jpeg_to_grey(p, used, c->w, c->h, c->grey, sizeof c->grey);
+        st = rp_hal_jpeg_to_grey(p, used, c->w, c->h, c->grey, sizeof c->grey);
+        break;
     case V4L2_PIX_FMT_YUYV:
-        return used < need ? RP_HAL_E_FORMAT
-                           : rp_hal_yuyv_to_grey(p, c->bpl, c->w, c->h, c->grey, c->w);
+        st = used < need ? RP_HAL_E_FORMAT
+                         : rp_hal_yuyv_to_grey(p, c->bpl, c->w, c->h, c->grey, c->w);
+        break;
     case V4L2_PIX_FMT_UYVY:
-        return used < need ? RP_HAL_E_FORMAT
-                           : rp_hal_uyvy_to_grey(p, c->bpl, c->w, c->h, c->grey, c->w);
+        st = used < need ? RP_HAL_E_FORMAT
+                         : rp_hal_uyvy_to_grey(p, c->bpl, c->w, c->h, c->grey, c->w);
+        break;
     default: /* GREY, or the grey first plane of a planar YUV format */
-        if (used < need) {
-            return RP_HAL_E_FORMAT;
-        }
-        for (uint32_t v = 0; v < c->h; v++) {
-            memcpy(c->grey + (size_t)v * c->w, p + (size_t)v * c->bpl, c->w);
-        }
-        return RP_HAL_OK;
+        st = used < need ? RP_HAL_E_FORMAT : RP_HAL_OK;
+        img->data = p;
+        img->stride = c->bpl;
+        img->size = (uint32_t)used;
+        break;
     }
+    if (st != RP_HAL_OK) {
+        img->data = NULL;
+    }
+    return st;
 }
 
 static int64_t buf_time_us(const struct v4l2_buffer *b)
@@ -423,17 +481,32 @@ static int64_t buf_time_us(const struct v4l2_buffer *b)
     return rp_hal_now_us(); /* the driver's clock is not ours: stamp on arrival */
 }
 
-/* Drains the device to its newest frame and converts that one. 1: a new frame is pending,
- * 0: nothing new, -1: the device failed (errno kept). */
+static int cam_requeue(v4l2_cam_t *c, uint32_t idx)
+{
+    struct v4l2_buffer q = mmap_buf(idx);
+    return xioctl(c->fd, VIDIOC_QBUF, &q);
+}
+
+/* Gives camera c's k oldest held frames back to the driver. 0, or -1 if the device failed. */
+static int cam_drop_held(v4l2_cam_t *c, uint8_t k)
+{
+    int rc = 0;
+    for (uint8_t j = 0; j < k && j < c->n_held; j++) {
+        rc |= cam_requeue(c, c->held[j].idx);
+    }
+    k = k < c->n_held ? k : c->n_held;
+    memmove(c->held, c->held + k, (size_t)(c->n_held - k) * sizeof c->held[0]);
+    c->n_held = (uint8_t)(c->n_held - k);
+    return rc;
+}
+
+/* Takes every frame the driver has ready into the held list (the oldest goes back when it is
+ * full). 1: new frames, 0: none, -1: the device failed (errno kept). */
 static int cam_read(v4l2_cam_t *c)
 {
-    int newest = -1;
-    size_t newest_used = 0;
+    int got = 0;
     for (;;) {
-        struct v4l2_buffer b;
-        memset(&b, 0, sizeof b);
-        b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        b.memory = V4L2_MEMORY_MMAP;
+        struct v4l2_buffer b = mmap_buf(0);
         if (xioctl(c->fd, VIDIOC_DQBUF, &b) != 0) {
             if (errno == EAGAIN) {
                 break;
@@ -444,50 +517,29 @@ static int cam_read(v4l2_cam_t *c)
             errno = EIO;
             return -1;
         }
+        c->last_frame = rp_hal_now_us();
         if (rp_hal_seq_update(&c->seq, b.sequence) > 0) {
             c->dropped = 1;
         }
-        if (newest >= 0) {
-            struct v4l2_buffer q = b;
-            q.index = (uint32_t)newest;
-            if (xioctl(c->fd, VIDIOC_QBUF, &q) != 0) {
-                return -1;
-            }
-        }
         if (b.flags & V4L2_BUF_FLAG_ERROR) {
-            newest = -1;
             c->dropped = 1;
-            if (xioctl(c->fd, VIDIOC_QBUF, &b) != 0) {
+            if (cam_requeue(c, b.index) != 0) {
                 return -1;
             }
             continue;
         }
-        newest = (int)b.index;
-        newest_used = b.bytesused != 0 ? b.bytesused : c->len[b.index];
-        c->t_us = buf_time_us(&b);
-        c->fseq = b.sequence;
+        if (c->n_held == RP_HAL_V4L2_HOLD && cam_drop_held(c, 1) != 0) {
+            return -1;
+        }
+        const size_t used = b.bytesused != 0 ? b.bytesused : c->len[b.index];
+        c->held[c->n_held].idx = b.index;
+        c->held[c->n_held].t_us = buf_time_us(&b);
+        c->held[c->n_held].seq = b.sequence;
+        c->held[c->n_held].used = (uint32_t)(used < c->len[b.index] ? used : c->len[b.index]);
+        c->n_held++;
+        got = 1;
     }
-    if (newest < 0) {
-        return 0;
-    }
-    const rp_hal_status_t st =
-        cam_convert(c, (const uint8_t *)c->buf[newest], newest_used > c->len[newest]
-                                                            ? c->len[newest] : newest_used);
-    struct v4l2_buffer q;
-    memset(&q, 0, sizeof q);
-    q.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    q.memory = V4L2_MEMORY_MMAP;
-    q.index = (uint32_t)newest;
-    if (xioctl(c->fd, VIDIOC_QBUF, &q) != 0) {
-        return -1;
-    }
-    c->last_frame = rp_hal_now_us();
-    if (st != RP_HAL_OK) { /* a corrupt frame (truncated, bad JPEG) counts as dropped */
-        c->dropped = 1;
-        return 0;
-    }
-    c->pending = 1;
-    return 1;
+    return got;
 }
 
 static void cam_lost(v4l2_src_t *s, v4l2_cam_t *c, const char *why, int64_t now)
@@ -539,6 +591,7 @@ static rp_hal_status_t v4l2_open(void **ctx, const rp_hal_cfg_t *cfg, char *err)
     s->err = err;
     for (uint8_t i = 0; i < cfg->n_cams; i++) {
         s->cam[i].fd = -1;
+        s->cam[i].out_idx = -1;
         s->cam[i].cfg = &s->cfg.cam[i];
     }
     for (uint8_t i = 0; i < cfg->n_cams; i++) {
@@ -600,13 +653,17 @@ static rp_hal_status_t v4l2_stop(void *ctx)
             (void)xioctl(c->fd, VIDIOC_STREAMOFF, &type); /* returns every buffer to us */
         }
         c->streaming = 0;
-        c->pending = 0;
+        c->n_held = 0;
+        c->out_idx = -1;
     }
     s->started = 0;
     return RP_HAL_OK;
 }
 
-static void fill_set(v4l2_src_t *s, rp_hal_set_t *set, const uint8_t in[])
+/* The set of the picked frames (rp_hal_group): each camera's picked frame is delivered (held
+ * until the next grab), its older frames go back to the driver; a camera without a pick gives
+ * back the frames older than the set's window. */
+static void fill_set(v4l2_src_t *s, rp_hal_set_t *set, const int8_t pick[], int64_t anchor)
 {
     rp_hal_set_clear(set, s->cfg.n_cams);
     uint8_t first = 1;
@@ -614,26 +671,38 @@ static void fill_set(v4l2_src_t *s, rp_hal_set_t *set, const uint8_t in[])
         v4l2_cam_t *c = &s->cam[i];
         rp_hal_frame_t *f = &set->cam[i];
         f->drops = c->seq.drops;
-        if (c->gone || (c->rejoining && !in[i])) {
+        if (c->gone) {
             f->flags = RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE;
             continue;
         }
-        if (!in[i]) {
+        if (pick[i] < 0) {
+            uint8_t old = 0;
+            while (old < c->n_held && c->held[old].t_us < anchor - s->cfg.sync_tol_us) {
+                old++;
+            }
+            (void)cam_drop_held(c, old); /* a failing device shows at the next read */
+            f->flags = c->rejoining ? RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE : RP_HAL_CAM_MISSING;
             continue;
         }
+        (void)cam_drop_held(c, (uint8_t)pick[i]);
+        const uint32_t idx = c->held[0].idx;
+        f->utime = c->held[0].t_us;
+        f->seq = c->held[0].seq;
+        const rp_hal_status_t st = cam_image(c, (const uint8_t *)c->buf[idx], c->held[0].used,
+                                             &f->img);
+        memmove(c->held, c->held + 1, (size_t)(c->n_held - 1) * sizeof c->held[0]);
+        c->n_held--;
+        c->out_idx = (int)idx;
         c->rejoining = 0;
-        f->img.data = c->grey;
-        f->img.w = c->w;
-        f->img.h = c->h;
-        f->img.stride = c->w;
-        f->img.size = (uint32_t)c->w * c->h;
-        f->utime = c->t_us;
-        f->seq = c->fseq;
+        if (st != RP_HAL_OK) { /* short or corrupt frame: this set goes without it */
+            f->flags = RP_HAL_CAM_MISSING | RP_HAL_CAM_DROPPED;
+            c->dropped = 0;
+            continue;
+        }
         f->flags = c->dropped ? RP_HAL_CAM_DROPPED : RP_HAL_CAM_OK;
         c->dropped = 0;
-        c->pending = 0;
         if (first) {
-            set->utime = c->t_us;
+            set->utime = f->utime;
             first = 0;
         }
     }
@@ -648,8 +717,17 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
     }
     const int64_t timeout_us = (int64_t)s->cfg.timeout_ms * 1000;
     const int64_t deadline = rp_hal_now_us() + timeout_us;
-    int64_t t[RP_MAX_CAMS] = {0};
-    uint8_t have[RP_MAX_CAMS] = {0}, in[RP_MAX_CAMS] = {0};
+    int64_t t[RP_MAX_CAMS * RP_HAL_V4L2_HOLD] = {0};
+    uint8_t count[RP_MAX_CAMS] = {0}, need[RP_MAX_CAMS] = {0};
+    int8_t pick[RP_MAX_CAMS];
+    int64_t anchor;
+    for (uint8_t i = 0; i < n; i++) { /* the last set's buffers go back to the drivers */
+        v4l2_cam_t *c = &s->cam[i];
+        if (!c->gone && c->out_idx >= 0 && cam_requeue(c, (uint32_t)c->out_idx) != 0) {
+            cam_lost(s, c, strerror(errno), rp_hal_now_us());
+        }
+        c->out_idx = -1;
+    }
     for (;;) {
         int64_t now = rp_hal_now_us();
         for (uint8_t i = 0; i < n; i++) {
@@ -665,25 +743,25 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
             }
         }
         for (uint8_t i = 0; i < n; i++) {
-            have[i] = (uint8_t)(!s->cam[i].gone && s->cam[i].pending);
-            t[i] = s->cam[i].t_us;
-        }
-        int64_t anchor;
-        const uint8_t k = rp_hal_group(t, have, n, s->cfg.sync_tol_us, in, &anchor);
-        for (uint8_t i = 0; i < n; i++) {
-            if (have[i] && !in[i]) {
-                s->cam[i].pending = 0; /* stale: wait for the camera's next frame */
+            const v4l2_cam_t *c = &s->cam[i];
+            need[i] = (uint8_t)(!c->gone && !c->rejoining);
+            count[i] = c->gone ? 0 : c->n_held;
+            for (uint8_t k = 0; k < count[i]; k++) {
+                t[i * RP_HAL_V4L2_HOLD + k] = c->held[k].t_us;
             }
         }
-        uint8_t complete = k > 0; /* every camera that is not gone or rejoining is in */
-        for (uint8_t i = 0; i < n; i++) {
-            const v4l2_cam_t *c = &s->cam[i];
-            complete = (uint8_t)(complete && (c->gone || c->rejoining || in[i]));
-        }
-        if (complete) {
-            fill_set(s, set, in);
+        if (rp_hal_group(t, count, n, RP_HAL_V4L2_HOLD, need, s->cfg.sync_tol_us, pick,
+                         &anchor) > 0) {
+            fill_set(s, set, pick, anchor);
             set->seq = s->set_seq++;
             return RP_HAL_OK;
+        }
+        for (uint8_t i = 0; i < n; i++) { /* frames that can never be in a set go back */
+            const uint8_t h = rp_hal_group_hopeless(t, count, n, RP_HAL_V4L2_HOLD, need,
+                                                    s->cfg.sync_tol_us, i);
+            if (h > 0 && cam_drop_held(&s->cam[i], h) != 0) {
+                cam_lost(s, &s->cam[i], strerror(errno), now);
+            }
         }
         now = rp_hal_now_us();
         if (now >= deadline) {
@@ -693,9 +771,17 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
                 const v4l2_cam_t *c = &s->cam[i];
                 len += snprintf(s->err + len, (size_t)(RP_HAL_ERR_MAX - len), " cam%u %s",
                                 (unsigned)i, c->gone ? "gone" : c->rejoining ? "rejoining"
-                                             : in[i] ? "in" : have[i] ? "stale" : "no frame");
+                                             : c->n_held > 0 ? "waiting" : "no frame");
+                need[i] = 0;
+                count[i] = c->gone ? 0 : c->n_held;
+                for (uint8_t k = 0; k < count[i]; k++) {
+                    t[i * RP_HAL_V4L2_HOLD + k] = c->held[k].t_us;
+                }
             }
-            fill_set(s, set, in);
+            /* What there is: the newest frame held and those within the tolerance of it. */
+            (void)rp_hal_group(t, count, n, RP_HAL_V4L2_HOLD, need, s->cfg.sync_tol_us, pick,
+                               &anchor);
+            fill_set(s, set, pick, anchor);
             return RP_HAL_E_TIMEOUT;
         }
         int64_t wait = deadline - now;

@@ -43,13 +43,28 @@ typedef struct {
 /* Feeds the next number; returns how many frames were skipped just before it (0 if none). */
 uint32_t rp_hal_seq_update(rp_hal_seq_t *s, uint32_t seq);
 
-/* Grouping by timestamp. have[i]: camera i has a pending frame, taken at t_us[i]. The set's
- * anchor is the newest pending frame; camera i joins the set (in[i] = 1) if its frame is within
- * tol_us of the anchor, otherwise its frame is stale (in[i] = 0 with have[i] = 1) and the camera
- * must wait for a newer one. Returns how many cameras joined; *anchor_us gets the anchor (0 if
- * none pending). */
-uint8_t rp_hal_group(const int64_t t_us[], const uint8_t have[], uint8_t n, int64_t tol_us,
-                     uint8_t in[], int64_t *anchor_us);
+/* mmap buffers per device, and how many of them may hold frames waiting for a set (the rest:
+ * the one delivered in the last set and at least one with the driver). */
+#ifndef RP_HAL_V4L2_NBUF
+#define RP_HAL_V4L2_NBUF 6
+#endif
+#define RP_HAL_V4L2_HOLD (RP_HAL_V4L2_NBUF - 2)
+
+/* Grouping by timestamp. t_us[i * stride + k], k < count[i]: the times of the frames camera i
+ * holds, oldest first. A set is an anchor time a, one of the held frames, such that every camera
+ * with need[i] holds a frame in [a - tol_us, a]; the newest such a wins, and every camera
+ * (needed or not) takes its newest frame in that window: pick[i] = k, or -1. Returns how many
+ * cameras were picked, 0 if there is no set (pick all -1, *anchor_us 0). With no camera needed
+ * the anchor is the newest frame held. Holding several frames per camera lets a camera whose
+ * frames arrive later than the others' (more than a frame period) still meet them. */
+uint8_t rp_hal_group(const int64_t *t_us, const uint8_t *count, uint8_t n, uint8_t stride,
+                     const uint8_t *need, int64_t tol_us, int8_t *pick, int64_t *anchor_us);
+
+/* How many of camera i's oldest held frames can never be in a set: a frame at t is hopeless
+ * when some needed camera j != i holds frames that are all newer than t + tol_us (its later
+ * frames are newer still). */
+uint8_t rp_hal_group_hopeless(const int64_t *t_us, const uint8_t *count, uint8_t n,
+                              uint8_t stride, const uint8_t *need, int64_t tol_us, uint8_t i);
 
 /* What the open v4l2 source negotiated for camera cam, in words for logs, e.g.
  * "/dev/video0: GREY 640x480, 640 bytes/line, 4 mmap buffers"; RP_HAL_E_STATE if no v4l2
