@@ -184,8 +184,8 @@ static void test_group(void **state)
 /* Simulated cameras at 25 fps with random phase, 1 ms jitter, 2 % of frames lost; camera 3's
  * frames arrive lag_ms late. The grab's policy (hold up to HOLD frames per camera, take the
  * newest set every camera can meet, give back frames no set can use) forms sets within the
- * tolerance at nearly the full rate, also when one camera lags more than a frame period (with one
- * frame per camera, a camera more than a period late would never meet the others). */
+ * tolerance at nearly the full rate, also when one camera lags more than a frame period (keeping
+ * only each camera's newest frame, a camera that late rarely or never meets the others). */
 static int simulate_grouping(int64_t lag_us, int64_t tol_us, int64_t *worst_spread)
 {
     enum { NC = 4, PERIOD = 40000 };
