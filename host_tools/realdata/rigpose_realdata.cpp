@@ -48,6 +48,8 @@ struct Profile {
     int levels, win, min_dist, grid_x, grid_y;
     double match_min_depth_m, match_max_depth_m; /* stereo search along the ray */
     int match_half_win;    /* stereo patch half side, px */
+    int match_subpix;      /* stereo: 1-D LK iterations after the parabola (0: parabola only) */
+    double fb_max_px;      /* tracker's forward-backward tolerance, px */
     double match_min_zncc; /* stereo: lowest accepted patch score */
     double max_depth_m;    /* triangulated landmarks kept up to this depth */
     int min_tracked;       /* re-initialise under this many landmarks */
@@ -75,6 +77,8 @@ Profile kitti_profile()
     p.match_min_depth_m = 2.0;
     p.match_max_depth_m = 100.0;
     p.match_half_win = 4;
+    p.match_subpix = 5;
+    p.fb_max_px = 1.0;
     p.match_min_zncc = 0.8;
     p.max_depth_m = 80.0;
     p.min_tracked = 80;
@@ -103,6 +107,8 @@ Profile euroc_profile()
     p.match_min_depth_m = 0.5;
     p.match_max_depth_m = 30.0;
     p.match_half_win = 4;
+    p.match_subpix = 5;
+    p.fb_max_px = 1.0;
     p.match_min_zncc = 0.8;
     p.max_depth_m = 30.0;
     p.min_tracked = 60;
@@ -154,6 +160,8 @@ rp_status_t make_cfg(const Profile &pr, rp_pipe_cfg_t *cfg)
     cfg->smatch.min_depth_m = (rp_real)pr.match_min_depth_m;
     cfg->smatch.max_depth_m = (rp_real)pr.match_max_depth_m;
     cfg->smatch.half_win = (uint8_t)pr.match_half_win;
+    cfg->smatch.subpix_iter = (uint8_t)pr.match_subpix;
+    cfg->track.fb_max_q16 = (uint32_t)std::lround(pr.fb_max_px * 65536.0);
     cfg->smatch.min_zncc_q15 = (int16_t)std::lround(pr.match_min_zncc * 32767.0);
     return RP_OK;
 }
@@ -354,7 +362,8 @@ void usage(FILE *f)
         "                       as a yardstick of the ground truth\n"
         "profile overrides: --q-trans Q --q-rot Q --sigma-px S --features N --levels L --win W\n"
         "  --min-dist D --grid X,Y --max-depth M --match-depth MIN,MAX --match-win H\n"
-        "  --match-zncc Z --min-tracked N --refine 0|1 --iterations N --gate CHI2\n");
+        "  --match-zncc Z --match-subpix N --fb-max PX --min-tracked N --refine 0|1\n"
+        "  --iterations N --gate CHI2\n");
 }
 
 }  // namespace
@@ -451,6 +460,10 @@ int main(int argc, char **argv)
             pr.iterations = std::atoi(v);
         } else if (o.first == "--gate") {
             pr.gate_chi2 = std::atof(v);
+        } else if (o.first == "--match-subpix") {
+            pr.match_subpix = std::atoi(v);
+        } else if (o.first == "--fb-max") {
+            pr.fb_max_px = std::atof(v);
         } else if (o.first == "--match-win") {
             pr.match_half_win = std::atoi(v);
         } else if (o.first == "--match-zncc") {
