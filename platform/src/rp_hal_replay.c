@@ -13,7 +13,8 @@
  *               binary PGM (P5, maxval <= 255), at most RP_HAL_MAX_W x RP_HAL_MAX_H, and of the
  *               configured size if one is given.
  * Sets come as fast as they are asked for, or with cfg.realtime at their recorded spacing
- * (the first one at once). set.utime and each camera's utime are the recorded times; seq is the
+ * (the first one at once; a gap longer than timeout_ms gives RP_HAL_E_TIMEOUT after timeout_ms
+ * and the set comes at a later grab, so grab never blocks longer than timeout_ms). set.utime and each camera's utime are the recorded times; seq is the
  * row's index among the data rows. A failing row (missing or malformed image) returns its error,
  * naming file and line; the next grab goes on with the next row.
  */
@@ -46,6 +47,8 @@ typedef struct {
     uint8_t truth_have;          /* a truth row is buffered */
     int64_t truth_u;
     rp_real truth_p[6];
+    rp_hal_set_t ready;          /* the next set, read but not delivered yet */
+    uint8_t have_ready;
     char buf[LINE_MAX_CHARS];
     char path[2 * RP_HAL_PATH_MAX];
     uint8_t n_cols;              /* image columns in frames.csv */
@@ -395,14 +398,10 @@ static int truth_at(replay_src_t *s, int64_t u)
     return s->truth_have && s->truth_u == u;
 }
 
-static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
+/* Reads and loads the next row into the ready set (s->ready). */
+static rp_hal_status_t read_row(replay_src_t *s)
 {
-    replay_src_t *s = (replay_src_t *)ctx;
     const uint8_t n = s->cfg.n_cams;
-    if (!s->started) {
-        return rp_hal_fail(s->err, RP_HAL_E_STATE, "replay: grab before start");
-    }
-    rp_hal_set_clear(set, n);
     const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
     if (r == 0) {
         return rp_hal_fail(s->err, RP_HAL_E_END, "%s/frames.csv: end after %u sets", s->dir,
@@ -435,14 +434,8 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/truth.csv:%u: want utime_us and 6 numbers",
                            s->dir, (unsigned)s->tline);
     }
-    if (s->cfg.realtime) {
-        if (!s->paced) {
-            s->u0 = u;
-            s->clock0 = rp_hal_now_us();
-            s->paced = 1;
-        }
-        rp_hal_sleep_us(s->clock0 + (u - s->u0) - rp_hal_now_us());
-    }
+    rp_hal_set_t *set = &s->ready;
+    rp_hal_set_clear(set, n);
     for (uint8_t i = 0; i < n; i++) {
         rp_hal_frame_t *fr = &set->cam[i];
         fr->img.data = s->grey[i];
@@ -455,11 +448,47 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
         fr->flags = RP_HAL_CAM_OK;
     }
     set->utime = u;
-    set->seq = s->set_seq++;
     if (tr > 0) {
         set->has_truth = 1;
         memcpy(set->truth, s->truth_p, sizeof set->truth);
     }
+    s->have_ready = 1;
+    return RP_HAL_OK;
+}
+
+static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
+{
+    replay_src_t *s = (replay_src_t *)ctx;
+    if (!s->started) {
+        return rp_hal_fail(s->err, RP_HAL_E_STATE, "replay: grab before start");
+    }
+    rp_hal_set_clear(set, s->cfg.n_cams);
+    if (!s->have_ready) {
+        const rp_hal_status_t st = read_row(s);
+        if (st != RP_HAL_OK) {
+            return st;
+        }
+    }
+    if (s->cfg.realtime) {
+        const int64_t u = s->ready.utime;
+        if (!s->paced) {
+            s->u0 = u;
+            s->clock0 = rp_hal_now_us();
+            s->paced = 1;
+        }
+        const int64_t wait = s->clock0 + (u - s->u0) - rp_hal_now_us();
+        const int64_t limit = (int64_t)s->cfg.timeout_ms * 1000;
+        if (s->cfg.timeout_ms > 0 && wait > limit) { /* a gap in the recording: keep the set */
+            rp_hal_sleep_us(limit);
+            return rp_hal_fail(s->err, RP_HAL_E_TIMEOUT,
+                               "replay: next set due in %.3f s, more than timeout_ms",
+                               (double)wait * 1e-6);
+        }
+        rp_hal_sleep_us(wait);
+    }
+    *set = s->ready;
+    set->seq = s->set_seq++;
+    s->have_ready = 0;
     return RP_HAL_OK;
 }
 

@@ -234,7 +234,8 @@ static void test_replay_malformed_csv(void **state)
     assert_non_null(strstr(rp_hal_errmsg(NULL), "frames.csv"));
 }
 
-/* Malformed images (truncated PGM, 16-bit PGM, a text file, a wrong size) give E_FORMAT. */
+/* Malformed images (truncated PGM, 16-bit PGM, a text file, a wrong size, a cut PNG) give
+ * E_FORMAT. */
 static void test_replay_malformed_images(void **state)
 {
     (void)state;
@@ -243,8 +244,9 @@ static void test_replay_malformed_images(void **state)
     write_file("short.pgm", "P5\n40 30\n255\nabc");
     write_file("deep.pgm", "P5\n40 30\n65535\n");
     write_file("text.png", "hello");
+    write_file("cut.png", "\x89PNG\r\n\x1a\n\x00\x00\x00\x0dIHDR");
     write_file("frames.csv", "utime_us,cam0\n1,short.pgm\n2,deep.pgm\n3,text.png\n4,small.pgm\n"
-                             "5,ok.pgm\n");
+                             "5,cut.png\n6,ok.pgm\n");
     rp_hal_cfg_t cfg = replay_cfg(1);
     cfg.cam[0].w = W;
     cfg.cam[0].h = H;
@@ -252,7 +254,7 @@ static void test_replay_malformed_images(void **state)
     rp_hal_set_t set;
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
     assert_int_equal(rp_hal_start(src), RP_HAL_OK);
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < 5; k++) {
         assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
         printf("bad image %d: %s\n", k, rp_hal_errmsg(src));
     }
@@ -287,9 +289,11 @@ static void test_replay_realtime(void **state)
 {
     (void)state;
     write_pgm("x.pgm", 0, W, H);
-    write_file("frames.csv", "utime_us,cam0\n500000,x.pgm\n540000,x.pgm\n580000,x.pgm\n");
+    write_file("frames.csv", "utime_us,cam0\n500000,x.pgm\n540000,x.pgm\n580000,x.pgm\n"
+                             "830000,x.pgm\n");
     rp_hal_cfg_t cfg = replay_cfg(1);
     cfg.realtime = 1;
+    cfg.timeout_ms = 100;
     snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/frames.csv", g_dir);
     rp_hal_source_t *src;
     rp_hal_set_t set;
@@ -302,6 +306,19 @@ static void test_replay_realtime(void **state)
     const int64_t dt = rp_hal_now_us() - t0;
     printf("realtime replay: 3 sets 40 ms apart took %.1f ms\n", (double)dt / 1000.0);
     assert_true(dt >= 79000 && dt < 400000);
+    /* A 250 ms gap with timeout_ms 100: E_TIMEOUT after 100 ms, then the set on time. */
+    const int64_t t1 = rp_hal_now_us();
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_TIMEOUT);
+    const int64_t waited = rp_hal_now_us() - t1;
+    assert_int_equal(set.cam[0].flags, RP_HAL_CAM_MISSING);
+    while (rp_hal_grab(src, &set) == RP_HAL_E_TIMEOUT) {
+    }
+    const int64_t gap = rp_hal_now_us() - t1;
+    printf("realtime replay: 250 ms gap with timeout_ms 100: first grab %.1f ms, set after "
+           "%.1f ms\n", (double)waited / 1000.0, (double)gap / 1000.0);
+    assert_true(waited >= 100000 && waited < 200000);
+    assert_true(set.utime == 830000 && set.seq == 3);
+    assert_true(gap >= 240000 && gap < 500000);
     rp_hal_close(src);
 }
 
