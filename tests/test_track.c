@@ -1,6 +1,7 @@
 /* test_track.c - the image front end (rp_track.h): sub-pixel tracking of shifted synthetic
- * textures, checkerboard corners, the forward-backward check on an occluded patch, new ids, and
- * the status codes of bad images. */
+ * textures (several window sizes), checkerboard corners, the forward-backward check on an
+ * occluded patch, new ids, top-up of emptied cells, tiny images, the state's size, and the
+ * status codes of bad images. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -362,6 +363,112 @@ static void test_pyramid(void **s)
     }
 }
 
+
+/* Given windows of other sizes (7: one padded block of 8; 31: the largest, 32 wide), then the
+ * shift is still tracked sub-pixel: the padding of window rows adds nothing to the sums. (A 7x7
+ * window sees little texture: OpenCV's error is as large there, about 0.05 px.) */
+static void test_window_sizes(void **s)
+{
+    (void)s;
+    static const uint8_t wins[] = {7, 31};
+    static const double max_mean[] = {0.1, 0.05};
+    texture_t t;
+    texture_make(&t);
+    render(&t, 0, 0, img0);
+    render(&t, 1.3, -0.7, img1);
+    for (unsigned k = 0; k < sizeof(wins); ++k) {
+        rp_track_cfg_t cfg;
+        assert_ok(rp_track_default_cfg(&cfg));
+        cfg.win = wins[k];
+        assert_ok(rp_track_init(&trk, &cfg));
+        uint16_t n0 = 0, n1 = 0;
+        rp_image_t a = view(img0, W, H), b = view(img1, W, H);
+        assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, NULL));
+        assert_ok(rp_track_process(&trk, &b, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, NULL));
+        double sum = 0;
+        int m = 0;
+        for (int i = 0; i < n0; ++i) {
+            const double u = (double)f0[i].uv[0], v = (double)f0[i].uv[1];
+            const rp_feat_t *g = find_id(f1, n1, f0[i].id);
+            if (g == NULL || u < 20 || v < 20 || u > W - 21 || v > H - 21) {
+                continue;
+            }
+            sum += hypot((double)g->uv[0] - u - 1.3, (double)g->uv[1] - v + 0.7);
+            ++m;
+        }
+        print_message("window %d: %d interior tracks, mean error %.4f px\n", wins[k], m, sum / m);
+        assert_true(m >= 50);
+        assert_true(sum / m < max_mean[k]);
+    }
+}
+
+/* Given an image barely larger than the window (every window touches the border at every
+ * level), then tracking runs on replicated borders without reading outside the image. */
+static void test_tiny_image(void **s)
+{
+    (void)s;
+    const int w = 24, h = 22;
+    texture_t t;
+    texture_make(&t);
+    for (int v = 0; v < h; ++v) {
+        for (int u = 0; u < w; ++u) {
+            img0[v * w + u] = to_u8(texture_at(&t, u, v));
+            img1[v * w + u] = to_u8(texture_at(&t, u - 0.5, v - 0.25));
+        }
+    }
+    init_default();
+    uint16_t n0 = 0, n1 = 0;
+    rp_image_t a = view(img0, w, h), b = view(img1, w, h);
+    const rp_status_t s0 = rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, NULL);
+    const rp_status_t s1 = rp_track_process(&trk, &b, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, NULL);
+    print_message("tiny %dx%d: %s %d features, then %s %d\n", w, h, rp_status_str(s0), n0,
+                  rp_status_str(s1), n1);
+    assert_true(s0 == RP_OK || s0 == RP_E_TOO_FEW);
+    assert_true(s1 == RP_OK || s1 == RP_E_TOO_FEW);
+}
+
+/* Given a scene shifted left by 12 px (features of the left edge leave, a band on the right is
+ * new) and a tracker that tops up whenever it lacks any feature, then the new features go
+ * mostly to the emptied cells of the right edge, and the count is back at the target. */
+static void test_topup_refills_emptied_cells(void **s)
+{
+    (void)s;
+    texture_t t;
+    texture_make(&t);
+    render(&t, 0, 0, img0);
+    render(&t, -12, 0, img1);
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    cfg.topup_below = cfg.target;
+    assert_ok(rp_track_init(&trk, &cfg));
+    uint16_t n0 = 0, n1 = 0;
+    rp_track_info_t info;
+    rp_image_t a = view(img0, W, H), b = view(img1, W, H);
+    assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, NULL));
+    assert_ok(rp_track_process(&trk, &b, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, &info));
+    int new_right = 0, new_total = 0;
+    for (int i = info.n_tracked; i < n1; ++i) {
+        ++new_total;
+        new_right += (double)f1[i].uv[0] >= W - W / cfg.grid_x;
+    }
+    print_message("shift 12 px: %d tracked (lost fb %d, other %d), %d new, %d of them in the "
+                  "rightmost cells, %d in all\n", info.n_tracked, info.n_lost_fb, info.n_lost,
+                  info.n_new, new_right, n1);
+    assert_true(info.flags & RP_TRACK_TOPPED_UP);
+    assert_true(info.n_tracked >= 100);
+    assert_true(n1 >= 140 && n1 <= 150);
+    assert_true(new_total > 0 && new_right >= new_total / 2);
+}
+
+/* The tracker's state: two pyramids and small row rings, no full-frame response map. */
+static void test_state_size(void **s)
+{
+    (void)s;
+    print_message("sizeof(rp_tracker_t) = %zu bytes (pyramids %zu)\n", sizeof(rp_tracker_t),
+                  2 * sizeof(rp_pyr_t));
+    assert_true(sizeof(rp_tracker_t) < 2 * sizeof(rp_pyr_t) + 128 * 1024);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -376,6 +483,10 @@ int main(void)
         cmocka_unit_test(test_bad_images),
         cmocka_unit_test(test_no_texture_too_few),
         cmocka_unit_test(test_cap_full),
+        cmocka_unit_test(test_window_sizes),
+        cmocka_unit_test(test_tiny_image),
+        cmocka_unit_test(test_topup_refills_emptied_cells),
+        cmocka_unit_test(test_state_size),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

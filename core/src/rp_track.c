@@ -258,6 +258,7 @@ typedef struct {
     int16_t Jg[GRID_MAX];                                /* J's grey levels on the grid */
     int16_t T[(RP_TRACK_MAX_WIN + 3) * (WP_MAX + 16)];  /* I's grey levels around the window */
     int16_t Gg[GRID_MAX], Gx[GRID_MAX]; /* I interpolated at the patch, Q7 and Q3 */
+    int16_t mask[WP_MAX];               /* -1 on the window's columns, 0 on the padding */
 } lk_scratch_t;
 
 /* Widens n (a multiple of 8) grey levels to int16. */
@@ -283,13 +284,17 @@ static void load_tile(const uint8_t *P, int w, int h, int x0, int y0, int nr, in
             widen_row(row + x0, nc, t);
         } else {
             const int a = clampi(-x0, 0, nc), b = clampi(w - x0, a, nc); /* [a, b) in the image */
-            for (int x = 0; x < a; ++x) {
+            int x = 0;
+            for (; x < a; ++x) {
                 t[x] = row[0];
             }
-            for (int x = a; x < b; ++x) {
+            for (; x + 8 <= b; x += 8) {
+                widen_row(row + x0 + x, 8, t + x);
+            }
+            for (; x < b; ++x) {
                 t[x] = row[x0 + x];
             }
-            for (int x = b; x < nc; ++x) {
+            for (; x < nc; ++x) {
                 t[x] = row[w - 1];
             }
         }
@@ -314,10 +319,11 @@ static void interp_q7_q3(const int16_t *restrict t, int ts, int n, int16_t w0, i
 
 /* One window row from interpolated rows: Q3 rows a, b, c (above, at, below the window row,
  * starting one column left of the window), Q7 row g7 (the window row, same start); n (a multiple
- * of 8) columns of Iv (Q5), Ix, Iy (Scharr units). */
+ * of 8) columns of Iv (Q5), Ix, Iy (Scharr units; masked: 0 where mask is 0, the padding). */
 static void grad_row(const int16_t *restrict a, const int16_t *restrict b,
-                     const int16_t *restrict c, const int16_t *restrict g7, int n,
-                     int16_t *restrict iv, int16_t *restrict ix, int16_t *restrict iy)
+                     const int16_t *restrict c, const int16_t *restrict g7,
+                     const int16_t *restrict mask, int n, int16_t *restrict iv,
+                     int16_t *restrict ix, int16_t *restrict iy)
 {
     int16_t vs[GS_MAX], vd[GS_MAX]; /* vertical smoothing / difference per column */
     for (int x = 0; x < n + 8; x += 8) {
@@ -330,8 +336,8 @@ static void grad_row(const int16_t *restrict a, const int16_t *restrict b,
         for (int i = 0; i < 8; ++i) {
             const int k = x + i;
             iv[k] = (int16_t)((g7[k + 1] + 2) >> 2);
-            ix[k] = (int16_t)((vs[k + 2] - vs[k] + 4) >> 3);
-            iy[k] = (int16_t)((3 * (vd[k] + vd[k + 2]) + 10 * vd[k + 1] + 4) >> 3);
+            ix[k] = (int16_t)(((vs[k + 2] - vs[k] + 4) >> 3) & mask[k]);
+            iy[k] = (int16_t)(((3 * (vd[k] + vd[k + 2]) + 10 * vd[k + 1] + 4) >> 3) & mask[k]);
         }
     }
 }
@@ -347,6 +353,9 @@ static void lk_patch(lk_scratch_t *s, const uint8_t *I, int wI, int hI, int ix, 
 {
     const int wp = WPAD(win), gs = wp + 8, ts = wp + 16;
     const int16_t w0 = wt[0], w1 = wt[1], w2 = wt[2], w3 = wt[3];
+    for (int x = 0; x < wp; ++x) {
+        s->mask[x] = (int16_t)(x < win ? -1 : 0); /* padding columns: zero gradients */
+    }
     load_tile(I, wI, hI, ix - 1, iy - 1, win + 3, ts, s->T, ts);
     /* interpolated rows iy-1 .. iy+win, columns ix-1 .. ix+wp+6: Q7 in Gg, Q3 in Gx */
     for (int y = 0; y < win + 2; ++y) {
@@ -354,11 +363,8 @@ static void lk_patch(lk_scratch_t *s, const uint8_t *I, int wI, int hI, int ix, 
     }
     for (int y = 0; y < win; ++y) {
         const int16_t *p3 = s->Gx + y * gs;
-        grad_row(p3, p3 + gs, p3 + 2 * gs, s->Gg + (y + 1) * gs, wp, s->Iv + y * wp,
+        grad_row(p3, p3 + gs, p3 + 2 * gs, s->Gg + (y + 1) * gs, s->mask, wp, s->Iv + y * wp,
                  s->Ix + y * wp, s->Iy + y * wp);
-        for (int x = win; x < wp; ++x) {
-            s->Ix[y * wp + x] = s->Iy[y * wp + x] = 0; /* padding: no contribution */
-        }
     }
 }
 
@@ -392,8 +398,8 @@ static void lk_sample(lk_scratch_t *s, const uint8_t *J, int wJ, int hJ, int jx,
 
 /* Tracks one point from pyramid pI into pJ using the n_lev finest levels (<= both pyramids and
  * cfg.levels). p_q16: level-0 position in I; *q_q16: level-0 result in J. Iterations stop at a
- * step under cfg.eps_q16 at level 0 and under 4 x cfg.eps_q16 at coarser levels (their result
- * is only the start of the next finer level). Returns 1 if tracked, 0 if lost (out of bounds,
+ * step under cfg.eps_q16 at level 0 and under 16 x cfg.eps_q16 at coarser levels (their result
+ * is only the start of the next finer level, which converges from there). Returns 1 if tracked, 0 if lost (out of bounds,
  * too little texture, singular at level 0, residual above cfg.max_err_q5). */
 static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_t *pJ, int n_lev,
                     const int32_t p_q16[2], int32_t q_q16[2])
@@ -414,7 +420,7 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
         const rp_pyr_level_t *LI = &pI->lev[l], *LJ = &pJ->lev[l];
         const uint8_t *I = pI->pix + LI->off, *J = pJ->pix + LJ->off;
         const int wI = LI->w, hI = LI->h, wJ = LJ->w, hJ = LJ->h;
-        const int64_t eps = (int64_t)cfg->eps_q16 * (l > 0 ? 4 : 1);
+        const int64_t eps = (int64_t)cfg->eps_q16 * (l > 0 ? 16 : 1);
         const int64_t eps2 = eps * eps;
         /* point at this level (Q16; an arithmetic shift of a position >= -2^15 px) */
         const int32_t px = p_q16[0] / (1 << l), py = p_q16[1] / (1 << l);

@@ -15,7 +15,7 @@
  * Speed: window rows are padded to multiples of 8 pixels and every inner loop runs over whole
  * blocks of 8, which compilers vectorise at -O2 (SSE2, NEON); plain C, no intrinsics. The
  * backward check uses only the pyramid levels the forward displacement needs; coarse levels stop
- * at 4x the convergence step; detection streams rows (no full-frame response map) and, on
+ * at 16x the convergence step; detection streams rows (no full-frame response map) and, on
  * top-up, searches only the cells that lack features.
  */
 #ifndef RP_TRACK_H
