@@ -178,18 +178,26 @@ static void print_figures(const char *what, const figures_t *f)
            f->epi_max, 100 * f->depth_rel_mean, 100 * f->depth_rel_max, f->us_per_feat);
 }
 
+/* One case: the pair (general or the paper's), the room rendered with uniform noise +-noise
+ * grey levels, the left image's corners matched and measured against the truth. */
+static figures_t match_case(int general, double noise, const char *what)
+{
+    make_pair(general);
+    const fx_room_t rm = fx_room_default();
+    render_pair(&rm, noise);
+    const uint16_t n = detect_left();
+    init_matcher();
+    const figures_t f = match_and_measure(&rm, n);
+    print_figures(what, &f);
+    return f;
+}
+
 /* Given the paper's front pair and a textured room, then most corners whose point the right
  * camera sees are matched, on their epipolar line, within a tenth of a pixel of the truth. */
 static void test_front_pair_matches_truth(void **state)
 {
     (void)state;
-    make_pair(0);
-    const fx_room_t rm = fx_room_default();
-    render_pair(&rm, 0.0);
-    const uint16_t n = detect_left();
-    init_matcher();
-    const figures_t f = match_and_measure(&rm, n);
-    print_figures("front pair", &f);
+    const figures_t f = match_case(0, 0.0, "front pair");
     assert_true(f.n_matched >= 0.8 * f.n_findable);
     assert_true(f.err_mean < 0.1);
     assert_true(f.err_max < 0.5);
@@ -201,13 +209,7 @@ static void test_front_pair_matches_truth(void **state)
 static void test_front_pair_noisy(void **state)
 {
     (void)state;
-    make_pair(0);
-    const fx_room_t rm = fx_room_default();
-    render_pair(&rm, 4.0);
-    const uint16_t n = detect_left();
-    init_matcher();
-    const figures_t f = match_and_measure(&rm, n);
-    print_figures("front pair, noise +-4", &f);
+    const figures_t f = match_case(0, 4.0, "front pair, noise +-4");
     assert_true(f.n_matched >= 0.7 * f.n_findable);
     assert_true(f.err_mean < 0.15);
     assert_true(f.err_max < 1.0);
@@ -217,13 +219,7 @@ static void test_front_pair_noisy(void **state)
 static void test_general_pair_with_distortion(void **state)
 {
     (void)state;
-    make_pair(1);
-    const fx_room_t rm = fx_room_default();
-    render_pair(&rm, 0.0);
-    const uint16_t n = detect_left();
-    init_matcher();
-    const figures_t f = match_and_measure(&rm, n);
-    print_figures("verged distorted pair", &f);
+    const figures_t f = match_case(1, 0.0, "verged distorted pair");
     assert_true(f.n_matched >= 0.7 * f.n_findable);
     assert_true(f.err_mean < 0.15);
     assert_true(f.err_max < 0.7);
