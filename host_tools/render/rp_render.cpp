@@ -283,7 +283,7 @@ bool Scene::intersect(const double C[3], const double d[3], double *t_out, doubl
         return false;
     }
     double g1 = g(t1, p);
-    for (int it = 0; it < 16 && std::fabs(g1) > 1e-10; ++it) {
+    for (int it = 0; it < 16 && std::fabs(g1) > 1e-9; ++it) {
         const double den = g1 - g0;
         double t2 = std::fabs(den) > 1e-15 ? t1 - g1 * (t1 - t0) / den : sphere_t(radius(p));
         if (!(t2 > 0.0) || !std::isfinite(t2)) {

@@ -1,0 +1,464 @@
+/*
+ * rigpose-e2e - rigpose from pixels: rendered frame sets (rp_render.hpp: the paper's rig and
+ * motion through the textured shell) -> the core's image pipeline (rp_pipe.h: trackers, stereo
+ * matching, the layout's estimator) -> poses, scored as rigpose-sim scores them: for every frame
+ * j >= 1 (frame 0 defines the world) the absolute error of each pose column, |t_est - t_true|
+ * for tx ty tz and |wrap(angle_est - angle_true)| for alpha beta gamma; the table shows the means
+ * over all scored frames of all runs, one row per method.
+ *
+ * Beside each pixel-level row it prints the feature-level row of the same runs: the same
+ * estimator configuration fed rigpose-sim's simulated features (rp_sim_frame: 10,000 shell
+ * points, 0.5 px noise) along the same trajectories, and the ratio pixel / feature.
+ *
+ * Run r of `--runs N` is run r of the experiment `--seed` (the motion of rigpose-sim's run r);
+ * every method sees the same rendered images.
+ *
+ * usage: rigpose-e2e [--methods LIST] [--runs N] [--first-run R] [--check M=TX,...]
+ *                    [--json-out FILE] [render options, see --help]
+ */
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "rigpose/rp_pipe.h"
+#include "rp_render.hpp"
+#include "rp_render_cli.hpp"
+#include "rp_sim.h"
+
+namespace {
+
+const int NCOL = 6;
+const char *const col_name[NCOL] = {"tx", "ty", "tz", "alpha", "beta", "gamma"};
+
+struct Method {
+    rp_pipe_layout_t layout;
+    std::string name;
+    double check_tx = -1.0; /* --check bound on the mean tx error, m (< 0: none) */
+    /* accumulated over runs */
+    double err[NCOL] = {0, 0, 0, 0, 0, 0};     /* pixel level: sums of absolute errors */
+    double err_sim[NCOL] = {0, 0, 0, 0, 0, 0}; /* feature level, same runs */
+    double worst_run_tx = 0.0;
+    unsigned long lost = 0, lost_sim = 0, frames = 0;
+    double us_per_frame_sum = 0.0;
+    unsigned long feats = 0; /* features given to the estimator, all cameras, all frames */
+};
+
+double wrap_angle(double x)
+{
+    x = std::fmod(x + M_PI, 2.0 * M_PI);
+    if (x < 0.0) {
+        x += 2.0 * M_PI;
+    }
+    return x - M_PI;
+}
+
+void add_err(const rp_real p[6], const double *truth, double acc[NCOL])
+{
+    for (int c = 0; c < 3; ++c) {
+        acc[c] += std::fabs((double)p[c] - truth[c]);
+    }
+    for (int c = 3; c < NCOL; ++c) {
+        acc[c] += std::fabs(wrap_angle((double)p[c] - truth[c]));
+    }
+}
+
+/* The layout's pipeline configuration on the paper's rig, with rigpose-sim's estimator settings:
+ * sigma 0.5 px; single-camera features start at the shell's mid radius 0.8335 m +- 0.15 m. */
+rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, rp_pipe_cfg_t *cfg)
+{
+    const rp_status_t st = rp_pipe_default_cfg(layout, cfg);
+    if (st != RP_OK) {
+        return st;
+    }
+    const rp_real sigma = (rp_real)sigma_px;
+    cfg->stereo.ekf.sigma_px = sigma;
+    cfg->gc.ekf.sigma_px = sigma;
+    cfg->gc.init_depth_m = (rp_real)0.8335;
+    cfg->gc.init_depth_sigma_m = (rp_real)0.15;
+    cfg->gc.init_on_sphere = 1;
+    cfg->mono.ekf.sigma_px = sigma;
+    cfg->mono.init_depth_m = (rp_real)0.8335;
+    cfg->mono.init_depth_sigma_m = (rp_real)0.15;
+    return RP_OK;
+}
+
+rp_image_t view(const cv::Mat &m)
+{
+    rp_image_t im;
+    im.data = m.data;
+    im.w = (uint16_t)m.cols;
+    im.h = (uint16_t)m.rows;
+    im.stride = (uint32_t)m.step[0];
+    im.size = (uint32_t)(m.step[0] * (size_t)m.rows);
+    return im;
+}
+
+/* The feature-level reference: the estimator of cfg on rp_sim_frame's features of the same run.
+ * Only the estimator is used (the pipeline's trackers are not). */
+struct SimRef {
+    rp_vo_stereo_t stereo;
+    rp_vo_gc_t gc;
+    rp_frameset_t fs;
+};
+
+bool sim_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rp_rig_t &rig, uint64_t seed,
+                   uint32_t run, uint32_t frames, Method *m)
+{
+    rp_sim_cfg_t sc;
+    rp_sim_default_cfg(&sc);
+    sc.width = rig.cam[0].cam.width;
+    sc.height = rig.cam[0].cam.height;
+    sc.focal_px = (double)rig.cam[0].cam.fx;
+    sc.n_frames = frames;
+    rp_sim_run_t sr;
+    if (rp_sim_run_init(&sr, &sc, seed, run) != 0) {
+        return false;
+    }
+    const bool stereo = cfg.layout == RP_PIPE_STEREO4 || cfg.layout == RP_PIPE_STEREO2;
+    rp_status_t st = stereo ? rp_vo_stereo_init(&s->stereo, &sr.rig, &cfg.stereo)
+                            : rp_vo_gc_init(&s->gc, &sr.rig, &cfg.gc);
+    for (uint32_t j = 0; st == RP_OK && j < frames; ++j) {
+        (void)rp_sim_frame(&sr, j, &s->fs);
+        rp_estimate_t est;
+        const rp_status_t sj = stereo ? rp_vo_stereo_step(&s->stereo, &s->fs, &est)
+                                      : rp_vo_gc_step(&s->gc, &s->fs, &est);
+        if (j > 0) {
+            m->lost_sim += sj != RP_OK;
+            add_err(est.p, &sr.truth[6u * j], m->err_sim);
+        }
+    }
+    rp_sim_run_free(&sr);
+    return st == RP_OK;
+}
+
+void usage(FILE *out)
+{
+    std::fprintf(out,
+                 "usage: rigpose-e2e [options]\n"
+                 "Renders the paper's rig and motion, runs the image pipeline, scores the poses\n"
+                 "as rigpose-sim does (mean absolute error over frames 1..N-1 of every run).\n"
+                 "  --methods LIST   pipeline layouts (default stereo4,gc): stereo4 stereo2 gc\n"
+                 "  --runs N         runs (default 5); run r renders rigpose-sim's run r\n"
+                 "  --first-run R    first run index (default 0)\n"
+                 "  --sigma-px S     the estimators' pixel sigma (default 0.5)\n"
+                 "  --no-sim-ref     skip the feature-level reference rows\n"
+                 "  --check M=TX,..  exit 1 if method M's mean tx error exceeds TX metres\n"
+                 "  --json-out FILE  write {\"render_<method>_<col>_m|rad\": ...} to FILE\n"
+                 "  --quiet          no per-run lines\n"
+                 "  --verbose        one line per frame set and method (status, features, errors)\n");
+    rpr::cli_usage(out);
+}
+
+bool parse_methods(const char *list, std::vector<Method> *ms)
+{
+    ms->clear();
+    std::string s(list);
+    size_t p = 0;
+    while (p <= s.size()) {
+        const size_t c = s.find(',', p);
+        const std::string tok = s.substr(p, c == std::string::npos ? std::string::npos : c - p);
+        Method m;
+        if (rp_pipe_layout_from_name(tok.c_str(), &m.layout) != RP_OK ||
+            !(m.layout == RP_PIPE_STEREO4 || m.layout == RP_PIPE_STEREO2 ||
+              m.layout == RP_PIPE_GC)) {
+            std::fprintf(stderr, "rigpose-e2e: method '%s' not supported (stereo4 stereo2 gc)\n",
+                         tok.c_str());
+            return false;
+        }
+        m.name = tok;
+        ms->push_back(m);
+        if (c == std::string::npos) {
+            break;
+        }
+        p = c + 1;
+    }
+    return !ms->empty();
+}
+
+bool parse_checks(const char *list, std::vector<Method> *ms)
+{
+    std::string s(list);
+    size_t p = 0;
+    while (p < s.size()) {
+        size_t c = s.find(',', p);
+        if (c == std::string::npos) {
+            c = s.size();
+        }
+        const std::string tok = s.substr(p, c - p);
+        const size_t eq = tok.find('=');
+        bool found = false;
+        if (eq != std::string::npos) {
+            char *end = nullptr;
+            const double v = std::strtod(tok.c_str() + eq + 1, &end);
+            for (Method &m : *ms) {
+                if (m.name == tok.substr(0, eq) && end && !*end && v > 0.0) {
+                    m.check_tx = v;
+                    found = true;
+                }
+            }
+        }
+        if (!found) {
+            std::fprintf(stderr, "rigpose-e2e: bad --check item '%s' (method=metres, method "
+                                 "among --methods)\n", tok.c_str());
+            return false;
+        }
+        p = c + 1;
+    }
+    return true;
+}
+
+} /* namespace */
+
+int main(int argc, char **argv)
+{
+    rpr::SeqCfg sc;
+    std::vector<Method> methods;
+    parse_methods("stereo4,gc", &methods);
+    const char *checks = nullptr;
+    std::string json_out;
+    uint32_t runs = 5, first_run = 0;
+    double sigma_px = 0.5;
+    bool sim_ref = true, quiet = false, verbose = false;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : nullptr;
+        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!std::strcmp(a, "--no-sim-ref")) {
+            sim_ref = false;
+        } else if (!std::strcmp(a, "--verbose")) {
+            verbose = true;
+        } else if (!std::strcmp(a, "--quiet")) {
+            quiet = true;
+        } else if (!std::strcmp(a, "--methods") && v) {
+            if (!parse_methods(v, &methods)) {
+                return 2;
+            }
+            ++i;
+        } else if (!std::strcmp(a, "--check") && v) {
+            checks = v;
+            ++i;
+        } else if (!std::strcmp(a, "--json-out") && v) {
+            json_out = v;
+            ++i;
+        } else if ((!std::strcmp(a, "--runs") || !std::strcmp(a, "--first-run")) && v) {
+            char *end = nullptr;
+            const long x = std::strtol(v, &end, 10);
+            if (*end || x < (a[2] == 'r' ? 1 : 0) || x > 100000) {
+                std::fprintf(stderr, "rigpose-e2e: bad value for %s: '%s'\n", a, v);
+                return 2;
+            }
+            (a[2] == 'r' ? runs : first_run) = (uint32_t)x;
+            ++i;
+        } else if (!std::strcmp(a, "--sigma-px") && v) {
+            char *end = nullptr;
+            sigma_px = std::strtod(v, &end);
+            if (*end || !(sigma_px > 0.0 && sigma_px <= 100.0)) {
+                std::fprintf(stderr, "rigpose-e2e: bad value for --sigma-px: '%s'\n", v);
+                return 2;
+            }
+            ++i;
+        } else {
+            const int used = rpr::cli_parse(argc, argv, i, &sc);
+            if (used <= 0) {
+                if (used == 0) {
+                    std::fprintf(stderr, "rigpose-e2e: unknown option '%s'\n", a);
+                }
+                usage(stderr);
+                return 2;
+            }
+            i += used - 1;
+        }
+    }
+    if (checks && !parse_checks(checks, &methods)) {
+        return 2;
+    }
+    if (sc.frames < 2) {
+        std::fprintf(stderr, "rigpose-e2e: --frames must be >= 2 (frame 0 is not scored)\n");
+        return 2;
+    }
+
+    std::vector<rp_pipe_t *> pipes;
+    for (size_t m = 0; m < methods.size(); ++m) {
+        pipes.push_back(static_cast<rp_pipe_t *>(std::calloc(1, sizeof(rp_pipe_t))));
+    }
+    SimRef *ref = static_cast<SimRef *>(std::calloc(1, sizeof(SimRef)));
+    for (rp_pipe_t *p : pipes) {
+        if (!p || !ref) {
+            std::fprintf(stderr, "rigpose-e2e: out of memory\n");
+            return 1;
+        }
+    }
+
+    double render_s = 0.0;
+    for (uint32_t r = first_run; r < first_run + runs; ++r) {
+        rpr::SeqCfg rc = sc;
+        rc.run = r;
+        rpr::Sequence seq(rc);
+        if (!seq.ok()) {
+            std::fprintf(stderr, "rigpose-e2e: %s\n", seq.why().c_str());
+            return 2;
+        }
+        std::vector<rp_pipe_cfg_t> cfgs(methods.size());
+        for (size_t m = 0; m < methods.size(); ++m) {
+            rp_status_t st = make_cfg(methods[m].layout, sigma_px, &cfgs[m]);
+            if (st == RP_OK) {
+                st = rp_pipe_init(pipes[m], &seq.rig(), &cfgs[m]);
+            }
+            if (st != RP_OK) {
+                std::fprintf(stderr, "rigpose-e2e: %s: pipeline init failed: %s\n",
+                             methods[m].name.c_str(), rp_status_str(st));
+                return 1;
+            }
+        }
+        std::vector<double> run_err(methods.size(), 0.0);
+        std::vector<cv::Mat> img(seq.rig().n_cams);
+        for (uint32_t j = 0; j < rc.frames; ++j) {
+            const auto t0 = std::chrono::steady_clock::now();
+            rp_image_t views[RP_MAX_CAMS];
+            const rp_image_t *ptrs[RP_MAX_CAMS];
+            for (int k = 0; k < seq.rig().n_cams; ++k) {
+                seq.render(j, k, &img[k]);
+                views[k] = view(img[k]);
+                ptrs[k] = &views[k];
+            }
+            render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            for (size_t m = 0; m < methods.size(); ++m) {
+                rp_estimate_t est;
+                const auto t1 = std::chrono::steady_clock::now();
+                const rp_status_t st =
+                    rp_pipe_step(pipes[m], ptrs, seq.rig().n_cams, seq.utime(j), &est);
+                methods[m].us_per_frame_sum +=
+                    std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t1)
+                        .count();
+                const rp_frameset_t *fs = nullptr;
+                if (rp_pipe_frameset(pipes[m], &fs) == RP_OK) {
+                    for (int k = 0; k < RP_MAX_CAMS; ++k) {
+                        methods[m].feats += fs->n[k];
+                    }
+                }
+                if (verbose) {
+                    const rp_pipe_info_t *inf = nullptr;
+                    rp_pipe_info(pipes[m], &inf);
+                    std::printf("  run %u frame %u %-8s st %-12s flags 0x%02x feats %u %u %u %u %u %u "
+                                "err tx %+.5f ty %+.5f tz %+.5f gamma %+.5f\n",
+                                r, j, methods[m].name.c_str(), rp_status_str(st),
+                                (unsigned)est.flags, fs ? fs->n[0] : 0, fs ? fs->n[1] : 0,
+                                fs ? fs->n[2] : 0, fs ? fs->n[3] : 0, fs ? fs->n[4] : 0,
+                                fs ? fs->n[5] : 0, (double)est.p[0] - seq.truth(j)[0],
+                                (double)est.p[1] - seq.truth(j)[1],
+                                (double)est.p[2] - seq.truth(j)[2],
+                                (double)est.p[5] - seq.truth(j)[5]);
+                }
+                if (j == 0) {
+                    continue;
+                }
+                methods[m].frames++;
+                methods[m].lost += st != RP_OK;
+                double before = methods[m].err[0];
+                add_err(est.p, seq.truth(j), methods[m].err);
+                run_err[m] += methods[m].err[0] - before;
+            }
+        }
+        for (size_t m = 0; m < methods.size(); ++m) {
+            const double tx = run_err[m] / (rc.frames - 1);
+            methods[m].worst_run_tx = std::max(methods[m].worst_run_tx, tx);
+            double sim_tx = -1.0;
+            if (sim_ref) {
+                const double before = methods[m].err_sim[0];
+                if (!sim_reference(ref, cfgs[m], seq.rig(), rc.seed, r, rc.frames, &methods[m])) {
+                    std::fprintf(stderr, "rigpose-e2e: feature-level reference failed\n");
+                    return 1;
+                }
+                sim_tx = (methods[m].err_sim[0] - before) / (rc.frames - 1);
+            }
+            if (!quiet) {
+                std::printf("  run %u %-8s pixels tx %.6f m", r, methods[m].name.c_str(), tx);
+                if (sim_ref) {
+                    std::printf("   features tx %.6f m", sim_tx);
+                }
+                std::printf("\n");
+                std::fflush(stdout);
+            }
+        }
+    }
+
+    const double fx = sc.focal_px > 0.0 ? sc.focal_px : 800.0 * sc.width / 640.0;
+    std::printf("\nrigpose-e2e: from rendered pixels, %u run%s x %u frames (runs %u..%u of seed "
+                "%llu)\n  6 cameras %dx%d, fx = fy = %.1f px, principal point at the centre; "
+                "image noise %.2g grey levels, blur %.2g px, brightness %.2g, %dx%d samples/px\n"
+                "  mean absolute error per frame over frames 1..%u (frame 0 defines the world); "
+                "m and rad\n\n  %-26s",
+                runs, runs == 1 ? "" : "s", sc.frames, first_run, first_run + runs - 1,
+                (unsigned long long)sc.seed, sc.width, sc.height, fx, sc.noise_grey,
+                sc.blur_sigma, sc.brightness, sc.ss, sc.ss, sc.frames - 1, "");
+    for (const char *cn : col_name) {
+        std::printf("%10s", cn);
+    }
+    std::printf("%8s%10s%10s\n", "lost", "feats/fs", "us/fs");
+    bool checks_ok = true;
+    FILE *js = json_out.empty() ? nullptr : std::fopen(json_out.c_str(), "w");
+    if (!json_out.empty() && !js) {
+        std::fprintf(stderr, "rigpose-e2e: cannot write %s\n", json_out.c_str());
+        return 1;
+    }
+    if (js) {
+        std::fprintf(js, "{\"render_runs\": %u, \"render_frames\": %u", runs, sc.frames);
+    }
+    for (Method &m : methods) {
+        const double n = (double)m.frames;
+        std::printf("  %-26s", (m.name + " (pixels)").c_str());
+        for (int c = 0; c < NCOL; ++c) {
+            std::printf("%10.6f", m.err[c] / n);
+        }
+        const double fs_total = (double)runs * sc.frames;
+        std::printf("%8lu%10.0f%10.0f\n", m.lost, m.feats / fs_total, m.us_per_frame_sum / fs_total);
+        if (sim_ref) {
+            std::printf("  %-26s", (m.name + " (features, sim)").c_str());
+            for (int c = 0; c < NCOL; ++c) {
+                std::printf("%10.6f", m.err_sim[c] / n);
+            }
+            std::printf("%8lu\n  %-26s", m.lost_sim, "pixels / features");
+            for (int c = 0; c < NCOL; ++c) {
+                std::printf("%10.2f", m.err[c] / m.err_sim[c]);
+            }
+            std::printf("\n");
+        }
+        std::printf("  %-26s%10.6f\n", "worst run (pixels), tx", m.worst_run_tx);
+        if (m.check_tx > 0.0) {
+            const bool ok = m.err[0] / n <= m.check_tx && std::isfinite(m.err[0]);
+            std::printf("  check %s: mean tx %.6f m <= %.6f m: %s\n", m.name.c_str(), m.err[0] / n,
+                        m.check_tx, ok ? "ok" : "FAILED");
+            checks_ok = checks_ok && ok;
+        }
+        if (js) {
+            for (int c = 0; c < NCOL; ++c) {
+                std::fprintf(js, ", \"render_%s_%s_%s\": %.6g", m.name.c_str(), col_name[c],
+                             c < 3 ? "m" : "rad", m.err[c] / n);
+            }
+            if (sim_ref) {
+                std::fprintf(js, ", \"render_%s_vs_sim_tx_ratio\": %.4g", m.name.c_str(),
+                             m.err[0] / m.err_sim[0]);
+            }
+            std::fprintf(js, ", \"render_%s_lost_frames\": %lu", m.name.c_str(), m.lost);
+        }
+    }
+    std::printf("\n  rendering: %.1f s per frame set (6 cameras)\n",
+                render_s / ((double)runs * sc.frames));
+    if (js) {
+        std::fprintf(js, "}\n");
+        std::fclose(js);
+    }
+    for (rp_pipe_t *p : pipes) {
+        std::free(p);
+    }
+    std::free(ref);
+    return checks_ok ? 0 : 1;
+}
