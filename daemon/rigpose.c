@@ -53,6 +53,17 @@ enum {
 RP_STATIC_ASSERT(RP_MAX_CAMS == 6, "lcm_types: per-camera arrays are of 6");
 RP_STATIC_ASSERT((int)RP_METHOD_RC == (int)RP_PIPE_RC && (int)RP_METHOD_GC == (int)RP_PIPE_GC,
                  "rp_method_t and rp_pipe_layout_t agree");
+/* The messages carry the core's and the HAL's codes as they are. */
+RP_STATIC_ASSERT(RIGPOSE_POSE_T_METHOD_RC == RP_METHOD_RC && RIGPOSE_POSE_T_METHOD_GC == RP_METHOD_GC,
+                 "pose_t.METHOD_* are rp_method_t");
+RP_STATIC_ASSERT(RIGPOSE_POSE_T_FLAG_LOST == RP_EST_LOST &&
+                     RIGPOSE_POSE_T_FLAG_SCALE_WEAK == RP_EST_SCALE_WEAK,
+                 "pose_t.FLAG_* are RP_EST_*");
+RP_STATIC_ASSERT(RIGPOSE_STATUS_T_CAM_MISSING == RP_HAL_CAM_MISSING &&
+                     RIGPOSE_STATUS_T_CAM_GONE == RP_HAL_CAM_GONE &&
+                     RIGPOSE_STATUS_T_CAM_DROPPED == RP_HAL_CAM_DROPPED,
+                 "status_t.CAM_* are RP_HAL_CAM_*");
+#define CAM_STATE_BITS (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE | RP_HAL_CAM_DROPPED)
 
 /* Grab errors in a row (not timeouts) after which the source counts as failed for good. */
 #define MAX_GRAB_ERRORS 50
@@ -556,7 +567,7 @@ int main(int argc, char **argv)
             }
             /* Tell listeners which cameras are missing; keep going (devices are retried). */
             for (int k = 0; k < g_cfg.rig.n_cams; ++k) {
-                acc.cam_state[k] = (int8_t)(g_set.cam[k].flags & 0x7u);
+                acc.cam_state[k] = (int8_t)(g_set.cam[k].flags & CAM_STATE_BITS);
             }
             rigpose_status_t sm;
             fill_status(&sm, &acc, &g_cfg, &g_set, hst, NULL, &est, pose_seq - 1, 0.0f, 0.0f,
@@ -597,7 +608,7 @@ int main(int argc, char **argv)
         /* Status: every status_every sets, and at once when a camera changes state. */
         int changed = 0;
         for (int k = 0; k < g_cfg.rig.n_cams; ++k) {
-            const int8_t s = (int8_t)(g_set.cam[k].flags & 0x7u);
+            const int8_t s = (int8_t)(g_set.cam[k].flags & CAM_STATE_BITS);
             changed |= s != acc.cam_state[k];
             acc.cam_state[k] = s;
             if (!(g_set.cam[k].flags & RP_HAL_CAM_MISSING)) {
