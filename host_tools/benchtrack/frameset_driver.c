@@ -7,6 +7,8 @@
  * counts the instructions of steady-state frame sets only (divide by `measure`).
  *
  *   frameset_driver [--size 320|640] [--layout gc|stereo4] [--warm W] [--measure M] [--seed S]
+ *                   [--win N] [--levels L] [--target N]
+ * --win, --levels, --target override the trackers' defaults (21, 4, 150).
  * Prints the pose error of the last frame set (a sanity check that the pipeline tracked).
  */
 #include <math.h>
@@ -33,7 +35,7 @@ __attribute__((noinline)) rp_status_t bt_measured(const rp_image_t *const im[], 
 
 int main(int argc, char **argv)
 {
-    int size = 320, warm = 5, measure = 10;
+    int size = 320, warm = 5, measure = 10, win = 0, levels = 0, target = 0;
     uint64_t seed = 1;
     const char *layout = "gc";
     for (int i = 1; i < argc; ++i) {
@@ -45,11 +47,18 @@ int main(int argc, char **argv)
             warm = atoi(argv[++i]);
         } else if (!strcmp(argv[i], "--measure") && i + 1 < argc) {
             measure = atoi(argv[++i]);
+        } else if (!strcmp(argv[i], "--win") && i + 1 < argc) {
+            win = atoi(argv[++i]);
+        } else if (!strcmp(argv[i], "--levels") && i + 1 < argc) {
+            levels = atoi(argv[++i]);
+        } else if (!strcmp(argv[i], "--target") && i + 1 < argc) {
+            target = atoi(argv[++i]);
         } else if (!strcmp(argv[i], "--seed") && i + 1 < argc) {
             seed = strtoull(argv[++i], NULL, 10);
         } else {
             fprintf(stderr, "usage: %s [--size 320|640] [--layout gc|stereo4] [--warm W] "
-                            "[--measure M] [--seed S]\n", argv[0]);
+                            "[--measure M] [--seed S] [--win N] [--levels L] [--target N]\n",
+                    argv[0]);
             return 2;
         }
     }
@@ -63,8 +72,21 @@ int main(int argc, char **argv)
     bt_scene_t *sc = bt_scene_new(w, h, seed, n);
     uint8_t *img = malloc((size_t)n * RP_MAX_CAMS * w * h);
     if (sc == NULL || img == NULL || rp_pipe_layout_from_name(layout, &lay) != RP_OK ||
-        rp_pipe_default_cfg(lay, &cfg) != RP_OK ||
-        rp_pipe_init(&pipe_state, bt_scene_rig(sc), &cfg) != RP_OK) {
+        rp_pipe_default_cfg(lay, &cfg) != RP_OK) {
+        fprintf(stderr, "frameset_driver: setup failed (layout %s)\n", layout);
+        return 1;
+    }
+    if (win > 0) {
+        cfg.track.win = (uint8_t)win;
+    }
+    if (levels > 0) {
+        cfg.track.levels = (uint8_t)levels;
+    }
+    if (target > 0) {
+        cfg.track.target = (uint16_t)target;
+        cfg.track.topup_below = (uint16_t)(target * 4 / 5);
+    }
+    if (rp_pipe_init(&pipe_state, bt_scene_rig(sc), &cfg) != RP_OK) {
         fprintf(stderr, "frameset_driver: setup failed (layout %s)\n", layout);
         return 1;
     }
@@ -94,9 +116,9 @@ int main(int argc, char **argv)
         fails += st != RP_OK;
     }
     const double *p = bt_scene_pose(sc, n - 1);
-    printf("frameset_driver: %s %dx%d, %d warm + %d measured frame sets, %d not OK; last "
-           "position error %.4f m\n",
-           layout, w, h, warm, measure, fails,
+    printf("frameset_driver: %s %dx%d (window %d, %d levels, %d features), %d warm + %d measured "
+           "frame sets, %d not OK; last position error %.4f m\n",
+           layout, w, h, cfg.track.win, cfg.track.levels, cfg.track.target, warm, measure, fails,
            sqrt(pow((double)est.p[0] - p[0], 2) + pow((double)est.p[1] - p[1], 2) +
                 pow((double)est.p[2] - p[2], 2)));
     free(img);
