@@ -88,17 +88,6 @@ rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, rp_pipe_cfg_t *cf
     return RP_OK;
 }
 
-rp_image_t view(const cv::Mat &m)
-{
-    rp_image_t im;
-    im.data = m.data;
-    im.w = (uint16_t)m.cols;
-    im.h = (uint16_t)m.rows;
-    im.stride = (uint32_t)m.step[0];
-    im.size = (uint32_t)(m.step[0] * (size_t)m.rows);
-    return im;
-}
-
 /* The feature-level reference: the estimator of cfg on rp_sim_frame's features of the same run.
  * Only the estimator is used (the pipeline's trackers are not). */
 struct SimRef {
@@ -326,7 +315,7 @@ int main(int argc, char **argv)
             const rp_image_t *ptrs[RP_MAX_CAMS];
             for (int k = 0; k < seq.rig().n_cams; ++k) {
                 seq.render(j, k, &img[k]);
-                views[k] = view(img[k]);
+                views[k] = rpr::image_view(img[k]);
                 ptrs[k] = &views[k];
             }
             render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -29,6 +29,7 @@
 #include <opencv2/core.hpp>
 
 #include "rigpose/rp_rig.h"
+#include "rigpose/rp_track.h"
 
 namespace rpr {
 
@@ -119,6 +120,18 @@ struct Pose {
     double d[3];
     double R[9];
 };
+
+/* A cv::Mat (CV_8U, one channel) as the core's rp_image_t (borrowed: the Mat must outlive it). */
+inline rp_image_t image_view(const cv::Mat &m)
+{
+    rp_image_t im;
+    im.data = m.data;
+    im.w = (uint16_t)m.cols;
+    im.h = (uint16_t)m.rows;
+    im.stride = (uint32_t)m.step[0];
+    im.size = (uint32_t)(m.step[0] * (size_t)m.rows);
+    return im;
+}
 
 /* splitmix64 mixing of a few integers into one key (for per-frame, per-camera streams). */
 uint64_t key(uint64_t a, uint64_t b, uint64_t c = 0, uint64_t d = 0);
