@@ -103,6 +103,14 @@ static int win_sample(const lev_t *L, int32_t x_q16, int32_t y_q16, int hw, win_
     return 1;
 }
 
+/* num / den (den > 0) in Q15, rounded, within +-32767. */
+static int16_t score_q15(int64_t num, rp_real den)
+{
+    rp_real z = (rp_real)num / den * RP_C(32767.0);
+    z = z > RP_C(32767.0) ? RP_C(32767.0) : (z < RP_C(-32767.0) ? RP_C(-32767.0) : z);
+    return (int16_t)(z >= RP_C(0.0) ? z + RP_C(0.5) : z - RP_C(0.5));
+}
+
 /* ZNCC of two windows of one size, Q15; 0 if either is flat. */
 static int16_t zncc_q15(const win_t *T, const win_t *R)
 {
@@ -113,10 +121,35 @@ static int16_t zncc_q15(const win_t *T, const win_t *R)
     for (int i = 0; i < T->n; ++i) {
         sTR += (int32_t)T->v[i] * R->v[i];
     }
-    const int64_t num = (int64_t)T->n * sTR - T->s * R->s;
-    rp_real z = (rp_real)num / (T->sd * R->sd) * RP_C(32767.0);
-    z = z > RP_C(32767.0) ? RP_C(32767.0) : (z < RP_C(-32767.0) ? RP_C(-32767.0) : z);
-    return (int16_t)(z >= RP_C(0.0) ? z + RP_C(0.5) : z - RP_C(0.5));
+    return score_q15((int64_t)T->n * sTR - T->s * R->s, T->sd * R->sd);
+}
+
+/* ZNCC (Q15) of template T against the level image's window centred on integer pixel (x, y),
+ * in one pass (int32 sums: window <= 15x15, T in Q5 <= 8160, grey <= 255); SCORE_NONE if the
+ * window leaves the image, 0 if either side is flat. */
+static int16_t zncc_int(const lev_t *L, int x, int y, const win_t *T)
+{
+    const int hw = T->hw, side = 2 * hw + 1;
+    if (x - hw < 0 || y - hw < 0 || x + hw >= L->w || y + hw >= L->h) {
+        return SCORE_NONE;
+    }
+    int32_t s = 0, s2 = 0, sTR = 0;
+    const int16_t *t = T->v;
+    for (int r = 0; r < side; ++r) {
+        const uint8_t *p = L->p + (size_t)(y - hw + r) * L->w + (x - hw);
+        for (int c = 0; c < side; ++c) {
+            const int32_t q = p[c];
+            s += q;
+            s2 += q * q;
+            sTR += q * t[c];
+        }
+        t += side;
+    }
+    const int64_t var = (int64_t)T->n * s2 - (int64_t)s * s;
+    if (var <= 0 || !(T->sd > RP_C(0.0))) {
+        return 0;
+    }
+    return score_q15((int64_t)T->n * sTR - T->s * s, T->sd * rp_sqrt((rp_real)var));
 }
 
 static int32_t to_q16(rp_real x) { return (int32_t)rp_floor(x * RP_C(65536.0) + RP_C(0.5)); }
@@ -230,29 +263,31 @@ static int search(rp_smatch_t *sm, const dir_t *g, const rp_pyr_t *src, const rp
                   int lv, const rp_real uv[2], hit_t *hit)
 {
     const rp_smatch_cfg_t *cfg = &sm->cfg;
-    const int hw = cfg->half_win, hwc = lv > 0 ? (hw - 1 < 2 ? 2 : hw - 1) : hw;
-    const int S = 1 << lv;
-    const lev_t s0 = level_of(src, 0), sl = level_of(src, lv);
-    const lev_t d0 = level_of(dst, 0), dl = level_of(dst, lv);
+    const int hw = cfg->half_win;
+    const lev_t s0 = level_of(src, 0), d0 = level_of(dst, 0);
     win_t Tl, W;
-    if (!win_sample(&s0, to_q16(uv[0]), to_q16(uv[1]), hw, &hit->T0) ||
-        !win_sample(&sl, to_q16(uv[0] / (rp_real)S), to_q16(uv[1] / (rp_real)S), hwc, &Tl)) {
+    if (!win_sample(&s0, to_q16(uv[0]), to_q16(uv[1]), hw, &hit->T0)) {
         return MISS_OUTSIDE;
     }
     /* flat: n^2 var < (n min_std 32)^2 */
     if (hit->T0.sd < (rp_real)hit->T0.n * (rp_real)cfg->min_std * RP_C(32.0)) {
         return MISS_FLAT;
     }
+    const int S = 1 << lv, hwc = lv > 0 ? (hw - 1 < 2 ? 2 : hw - 1) : hw;
     const int n = make_curve(sm, g, uv, (rp_real)S);
     if (n < 2) {
+        return MISS_OUTSIDE;
+    }
+    const lev_t sl = level_of(src, lv), dl = level_of(dst, lv);
+    if (!win_sample(&sl, to_q16(uv[0] / (rp_real)S), to_q16(uv[1] / (rp_real)S), hwc, &Tl)) {
         return MISS_OUTSIDE;
     }
     /* coarse */
     int best = -1;
     for (int i = 0; i < n; ++i) {
-        const int32_t x = (sm->curve[i].u_q16 / S + Q16 / 2) & ~(int32_t)0xffff;
-        const int32_t y = (sm->curve[i].v_q16 / S + Q16 / 2) & ~(int32_t)0xffff;
-        sm->score[i] = win_sample(&dl, x, y, hwc, &W) ? zncc_q15(&Tl, &W) : SCORE_NONE;
+        const int x = (sm->curve[i].u_q16 / S + Q16 / 2) >> 16;
+        const int y = (sm->curve[i].v_q16 / S + Q16 / 2) >> 16;
+        sm->score[i] = zncc_int(&dl, x, y, &Tl);
         if (sm->score[i] != SCORE_NONE && (best < 0 || sm->score[i] > sm->score[best])) {
             best = i;
         }

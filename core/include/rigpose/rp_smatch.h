@@ -9,8 +9,9 @@
  * camera b, so the walk follows the true (curved) epipolar line of distorted images. A patch
  * score compares the windows (ZNCC: integer sums of Q5 grey levels, Q15 result):
  *   0. coarse: at pyramid level search_level, one step per level pixel, window half side
- *      half_win - 1 (at least 2); fine: at level 0, one step per pixel around the coarse best,
- *      window half side half_win, the template sampled at the feature's sub-pixel position;
+ *      half_win - 1 (at least 2), integer sums in one pass; fine: at level 0, one step per
+ *      pixel around the coarse best, window half side half_win, the template sampled at the
+ *      feature's sub-pixel position;
  *   1. best fine score >= min_zncc_q15, and the best other local maximum of the coarse scores
  *      (farther than 2 steps from the best) lower by at least uniq_margin_q15 (uniqueness);
  *   2. left-right consistency: the same search from the right pixel back along its epipolar
