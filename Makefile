@@ -1,7 +1,7 @@
 # rigpose - one Makefile for everything (host build, tests, cross build, benchmarks).
 #
 #   make            host build (core library variants + tools)
-#   make run        main job: the simulated rig, printing the Table 1 rows
+#   make run        main job: the rigpose daemon on the simulated rig, poses printed and on LCM
 #   make test       every host test, in every numeric / linear-algebra variant, under ASan+UBSan
 #   make cross      aarch64 build of the core (float) and tools that need only the core
 #   make test-arm   the core's tests, cross-built for aarch64, run under qemu-aarch64
@@ -95,9 +95,12 @@ $(REL)/rigpose-sim: host_tools/sim/rigpose_sim.c $(REL)/librigpose_sim.a $(REL)/
 	    $(REL)/librigpose_core.a -o $@ -lpthread -lstdc++ -lm
 
 # ---- the main job ----------------------------------------------------------------------------
-RUN_ARGS ?= --methods stereo4,stereo2 --runs 50 --seed 1
-run: deps $(REL)/rigpose-sim
-	$(REL)/rigpose-sim $(RUN_ARGS)
+# The daemon on the embedded default (config/sim.yaml: the simulated rig of Table 1, stereo4,
+# paced at 30 Hz), printing poses with their error against the simulated truth and publishing
+# them on LCM; 300 frame sets (10 s) by default, RUN_ARGS= runs until Ctrl-C.
+RUN_ARGS ?= --frames 300
+run: deps $(REL)/rigpose
+	$(REL)/rigpose --config config/sim.yaml $(RUN_ARGS)
 
 # ---- tests -----------------------------------------------------------------------------------
 test: deps $(HOST_TEST_BINS) check-nomalloc
