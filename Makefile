@@ -74,7 +74,7 @@ endef
 # Host test variants (sanitised, -O1 -g).
 define HOST_VARIANT
 $(call CORE_LIB,$(1),$(BUILD)/$(1),$(CC),$(CXX),-O1 -g $(SAN) $(VDEF_$(1)),ar)
-$(BUILD)/$(1)/tests/%: tests/%.c tests/rp_test.h $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a | $(BUILD)/$(1)/tests
+$(BUILD)/$(1)/tests/%: tests/%.c $$(wildcard tests/*.h) $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a | $(BUILD)/$(1)/tests
 	$(CC) $$(CSTD) $$(WARN) -D_POSIX_C_SOURCE=200809L $$(INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) $$< \
 	    $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a -o $$@ \
 	    $(SAN) -lcmocka -lstdc++ -lm
@@ -120,7 +120,7 @@ ARMDEF_float  := -DRP_REAL_IS_FLOAT=1 -DRP_LINALG_EIGEN=1
 ARMDEF_double := -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EIGEN=1
 define ARM_VARIANT
 $(call CORE_LIB,arm-$(1),$(ARM)/$(1),$(CROSS_PREFIX)gcc,$(CROSS_PREFIX)g++,-O2 -g $(ARMDEF_$(1)),$(CROSS_PREFIX)ar)
-$(ARM)/$(1)/tests/%: tests/%.c tests/rp_test.h $(ARM)/$(1)/librigpose_sim.a $(ARM)/$(1)/librigpose_core.a | $(ARM)/$(1)/tests
+$(ARM)/$(1)/tests/%: tests/%.c $$(wildcard tests/*.h) $(ARM)/$(1)/librigpose_sim.a $(ARM)/$(1)/librigpose_core.a | $(ARM)/$(1)/tests
 	$(CROSS_PREFIX)gcc $$(CSTD) $$(WARN) -D_POSIX_C_SOURCE=200809L $$(INC) -Itests -O2 -g $(ARMDEF_$(1)) $$< \
 	    $(ARM)/$(1)/librigpose_sim.a $(ARM)/$(1)/librigpose_core.a -o $$@ \
 	    -L/usr/lib/aarch64-linux-gnu -Wl,-rpath-link,/usr/lib/aarch64-linux-gnu -lcmocka -lstdc++ -lm
