@@ -19,6 +19,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "rigpose/rp_track.h"
+#include "../host_tools/common/rp_cv.hpp"
 
 static int n_pass = 0, n_fail = 0;
 
@@ -42,16 +43,6 @@ static cv::Mat texture(int w, int h, uint64_t seed)
     return out;
 }
 
-static rp_image_t view(const cv::Mat &m)
-{
-    rp_image_t im;
-    im.data = m.data;
-    im.w = (uint16_t)m.cols;
-    im.h = (uint16_t)m.rows;
-    im.stride = (uint32_t)m.step[0];
-    im.size = (uint32_t)(m.step[0] * (size_t)m.rows);
-    return im;
-}
 
 static rp_tracker_t trk;
 static rp_feat_t f0[RP_MAX_FEATS_PER_CAM], f1[RP_MAX_FEATS_PER_CAM];
@@ -73,7 +64,7 @@ static void run_scene(int w, int h, uint64_t seed, double deg, double tx, double
     rp_track_init(&trk, &cfg);
     uint16_t n0 = 0, n1 = 0;
     rp_track_info_t info;
-    rp_image_t va = view(a), vb = view(b);
+    rp_image_t va = rp_cv_view(a), vb = rp_cv_view(b);
     const auto t0 = std::chrono::steady_clock::now();
     const rp_status_t s0 = rp_track_process(&trk, &va, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, &info);
     const auto t1 = std::chrono::steady_clock::now();

@@ -34,6 +34,7 @@
 
 #include "bt_scene.h"
 #include "rigpose/rp_track.h"
+#include "../common/rp_cv.hpp"
 
 namespace {
 
@@ -87,16 +88,6 @@ void score(const seq &s, int cam, int j, birth &b, double u, double v, result &r
     b.last_uv[1] = v;
 }
 
-rp_image_t view(const cv::Mat &m)
-{
-    rp_image_t im;
-    im.data = m.data;
-    im.w = (uint16_t)m.cols;
-    im.h = (uint16_t)m.rows;
-    im.stride = (uint32_t)m.step[0];
-    im.size = (uint32_t)(m.step[0] * (size_t)m.rows);
-    return im;
-}
 
 /* rigpose's side: one rp_tracker_t per camera. */
 struct rp_side {
@@ -117,7 +108,7 @@ struct rp_side {
 
     double step(const seq &s, int j, int k, result *r)
     {
-        const rp_image_t im = view(s.img[(size_t)j * BT_NCAMS + k]);
+        const rp_image_t im = rp_cv_view(s.img[(size_t)j * BT_NCAMS + k]);
         uint16_t n = 0;
         const auto t0 = clk::now();
         rp_track_process(&trk[k], &im, (int64_t)j * 33333, out, RP_MAX_FEATS_PER_CAM, &n,

@@ -35,6 +35,7 @@
 
 #include "rigpose/rp_pipe.h"
 #include "rp_realdata.hpp"
+#include "../common/rp_cv.hpp"
 
 namespace fs = std::filesystem;
 
@@ -166,16 +167,6 @@ rp_status_t make_cfg(const Profile &pr, rp_pipe_cfg_t *cfg)
     return RP_OK;
 }
 
-rp_image_t view(const cv::Mat &m)
-{
-    rp_image_t im;
-    im.data = m.data;
-    im.w = (uint16_t)m.cols;
-    im.h = (uint16_t)m.rows;
-    im.stride = (uint32_t)m.step[0];
-    im.size = (uint32_t)(m.step[0] * (size_t)m.rows);
-    return im;
-}
 
 std::string flag_text(uint32_t f)
 {
@@ -531,7 +522,7 @@ int main(int argc, char **argv)
                 std::fprintf(stderr, "rigpose-realdata: %s: cannot read\n", seq.img[k][j].c_str());
                 return 2;
             }
-            v[k] = view(im[k]);
+            v[k] = rp_cv_view(im[k]);
             ptr[k] = &v[k];
         }
         rp_estimate_t est;

@@ -30,6 +30,7 @@
 
 #include "rigpose/rp_rig.h"
 #include "rigpose/rp_track.h"
+#include "../common/rp_cv.hpp"
 
 namespace rpr {
 
@@ -124,13 +125,7 @@ struct Pose {
 /* A cv::Mat (CV_8U, one channel) as the core's rp_image_t (borrowed: the Mat must outlive it). */
 inline rp_image_t image_view(const cv::Mat &m)
 {
-    rp_image_t im;
-    im.data = m.data;
-    im.w = (uint16_t)m.cols;
-    im.h = (uint16_t)m.rows;
-    im.stride = (uint32_t)m.step[0];
-    im.size = (uint32_t)(m.step[0] * (size_t)m.rows);
-    return im;
+    return rp_cv_view(m);
 }
 
 /* splitmix64 mixing of a few integers into one key (for per-frame, per-camera streams). */
