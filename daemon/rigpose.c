@@ -65,6 +65,22 @@ RP_STATIC_ASSERT(RIGPOSE_STATUS_T_CAM_MISSING == RP_HAL_CAM_MISSING &&
                  "status_t.CAM_* are RP_HAL_CAM_*");
 #define CAM_STATE_BITS (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE | RP_HAL_CAM_DROPPED)
 
+/* One word for a camera's state bits, worst first: a vanished device, no frame in this set,
+ * frames skipped by the driver before this one, or back to normal. */
+static const char *cam_state_str(int state)
+{
+    if (state & RP_HAL_CAM_GONE) {
+        return "gone";
+    }
+    if (state & RP_HAL_CAM_MISSING) {
+        return "missing";
+    }
+    if (state & RP_HAL_CAM_DROPPED) {
+        return "dropped frames";
+    }
+    return "ok again";
+}
+
 /* Grab errors in a row (not timeouts) after which the source counts as failed for good. */
 #define MAX_GRAB_ERRORS 50
 /* Latencies kept for the final percentiles (the first ones, if the run is longer). */
@@ -607,8 +623,10 @@ int main(int argc, char **argv)
 
         /* Status: every status_every sets, and at once when a camera changes state. */
         int changed = 0;
+        int8_t prev_state[RP_MAX_CAMS];
         for (int k = 0; k < g_cfg.rig.n_cams; ++k) {
             const int8_t s = (int8_t)(g_set.cam[k].flags & CAM_STATE_BITS);
+            prev_state[k] = acc.cam_state[k];
             changed |= s != acc.cam_state[k];
             acc.cam_state[k] = s;
             if (!(g_set.cam[k].flags & RP_HAL_CAM_MISSING)) {
@@ -628,10 +646,9 @@ int main(int argc, char **argv)
             (void)rigpose_status_t_publish(lcm, g_cfg.status_channel, &sm);
             if (changed && pose_seq > 0) {
                 for (int k = 0; k < g_cfg.rig.n_cams; ++k) {
-                    if (acc.cam_state[k] != 0) {
-                        printf("rigpose: camera %d (%s): %s%s\n", k, g_cfg.cam_name[k],
-                               (acc.cam_state[k] & RP_HAL_CAM_GONE) ? "gone" : "missing",
-                               " (reported on the status channel)");
+                    if (acc.cam_state[k] != prev_state[k]) {
+                        printf("rigpose: camera %d (%s): %s (reported on the status channel)\n",
+                               k, g_cfg.cam_name[k], cam_state_str(acc.cam_state[k]));
                     }
                 }
             }
