@@ -8,7 +8,8 @@
 #   make bench                     $(BUILD)/bench/realdata.json: kitti00_ate_percent,
 #                                  euroc_mh01_ate_m, ... (QUICK=1: 40 frames of each); also
 #                                  kitti00_from14_* (frames 14-99: past the ground truth's
-#                                  extrapolated start, README.md) and the OpenCV yardstick
+#                                  extrapolated start, README.md) and the two yardsticks
+#                                  (OpenCV stereo PnP; dense direct odometry, rp_direct.hpp)
 #
 # The images are larger than the default build's tracker limit (640x480: KITTI is 1241x376,
 # EuRoC 752x480), so the program links its own release build of the core with
@@ -24,7 +25,8 @@ $(eval $(call CORE_LIB,realdata,$(RD_DIR),$(CC),$(CXX),-O2 -g -DNDEBUG $(RD_DEFS
 RD_CXXFLAGS = -std=c++17 -O2 -g -DNDEBUG $(RD_DEFS) $(WARN) \
     $(patsubst -I%,-isystem %,$(shell pkg-config --cflags opencv4)) $(INC) -Ihost_tools/realdata
 RD_LIBS = -lopencv_calib3d -lopencv_video -lopencv_imgproc -lopencv_imgcodecs -lopencv_core -lm
-RD_SRC := host_tools/realdata/rigpose_realdata.cpp host_tools/realdata/rp_realdata.cpp
+RD_SRC := host_tools/realdata/rigpose_realdata.cpp host_tools/realdata/rp_realdata.cpp \
+    host_tools/realdata/rp_direct.cpp
 RD_HDR := $(wildcard host_tools/realdata/*.hpp core/include/rigpose/*.h)
 
 $(RD_BIN): $(RD_SRC) $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
@@ -39,9 +41,9 @@ RD_DATA = $(or $(RIGPOSE_DATA),$(abspath $(CURDIR)/../shared/data))
 # Conversions, scoring and loaders (host_tools/realdata/test_realdata_conv.cpp).
 RD_TEST := $(RD_DIR)/test_realdata_conv
 $(RD_TEST): host_tools/realdata/test_realdata_conv.cpp host_tools/realdata/rp_realdata.cpp \
-            $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
-	$(CXX) $(RD_CXXFLAGS) $< host_tools/realdata/rp_realdata.cpp $(RD_DIR)/librigpose_core.a \
-	    -o $@ $(RD_LIBS)
+            host_tools/realdata/rp_direct.cpp $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
+	$(CXX) $(RD_CXXFLAGS) $< host_tools/realdata/rp_realdata.cpp host_tools/realdata/rp_direct.cpp \
+	    $(RD_DIR)/librigpose_core.a -o $@ $(RD_LIBS)
 
 HOST_EXTRA_TESTS += $(RD_TEST) host_tools/realdata/test_realdata.sh
 test: $(RD_BIN) $(RD_TEST)
@@ -54,9 +56,10 @@ $(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
 	@mkdir -p $(BUILD)/bench
 	@if [ -d "$(RD_DATA)/kitti00_000-099" ] && [ -d "$(RD_DATA)/euroc_mh01_000-149" ]; then \
 	  $(RD_BIN) --kitti $(RD_DATA)/kitti00_000-099 --frames $(RD_BENCH_KITTI) --quiet --opencv-ref \
+	      --direct-ref \
 	      --json-out $(RD_DIR)/kitti00.json && \
 	  $(RD_BIN) --kitti $(RD_DATA)/kitti00_000-099 --first 14 --frames $(RD_BENCH_KITTI) --quiet \
-	      --opencv-ref --name kitti00_from14 --json-out $(RD_DIR)/kitti00_from14.json && \
+	      --opencv-ref --direct-ref --name kitti00_from14 --json-out $(RD_DIR)/kitti00_from14.json && \
 	  $(RD_BIN) --euroc $(RD_DATA)/euroc_mh01_000-149 --frames $(RD_BENCH_EUROC) --quiet \
 	      --json-out $(RD_DIR)/euroc_mh01.json && \
 	  $(PY) host_tools/bench/merge_json.py $@ $(RD_DIR)/kitti00.json \

@@ -18,6 +18,7 @@
  *            [--replay-out DIR [--copy-images]] [--no-run] [profile overrides, see --help]
  * Exit status: 0 done (and checks passed), 1 a check failed or the run broke, 2 bad usage/data.
  */
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +35,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "rigpose/rp_pipe.h"
+#include "rp_direct.hpp"
 #include "rp_realdata.hpp"
 #include "../common/rp_cv.hpp"
 
@@ -330,6 +332,43 @@ bool opencv_reference(const rprd::Sequence &seq, std::vector<rprd::Pose> *traj)
     return true;
 }
 
+/* One frame-to-frame step of a trajectory: T(j-1)^-1 T(j) (frame j's camera in frame j-1's). */
+rprd::Pose step_of(const std::vector<rprd::Pose> &traj, size_t j)
+{
+    return rprd::pose_mul(rprd::pose_inv(traj[j - 1]), traj[j]);
+}
+
+/* "length m, rotation angle deg, direction x/len y/len" of a step. */
+void print_step(const rprd::Pose &T)
+{
+    const double len = std::sqrt(T.t[0] * T.t[0] + T.t[1] * T.t[1] + T.t[2] * T.t[2]);
+    const double c = std::min(1.0, std::max(-1.0, (T.R[0] + T.R[4] + T.R[8] - 1.0) / 2.0));
+    std::printf(" | %6.4f %6.3f %7.4f %7.4f", len, std::acos(c) * 180.0 / M_PI,
+                len > 0.0 ? T.t[0] / len : 0.0, len > 0.0 ? T.t[1] / len : 0.0);
+}
+
+/* The --steps table: per frame, each trajectory's step (what the ground truth and the images
+ * say the camera did between two frames, whatever happened before). */
+void print_steps(const rprd::Sequence &seq, const std::vector<rprd::Pose> &est,
+                 const std::vector<rprd::Pose> &cv_ref, const std::vector<rprd::Pose> &direct)
+{
+    std::printf("\nsteps: length m, rotation deg, direction x/len y/len (camera frame j-1)\n"
+                "frame | truth | rigpose%s%s\n",
+                cv_ref.empty() ? "" : " | OpenCV PnP", direct.empty() ? "" : " | direct");
+    for (size_t j = 1; j < seq.truth.size() && j < est.size(); ++j) {
+        std::printf("%5zu", j);
+        print_step(step_of(seq.truth, j));
+        print_step(step_of(est, j));
+        if (j < cv_ref.size()) {
+            print_step(step_of(cv_ref, j));
+        }
+        if (j < direct.size()) {
+            print_step(step_of(direct, j));
+        }
+        std::printf("\n");
+    }
+}
+
 void usage(FILE *f)
 {
     std::fprintf(
@@ -351,6 +390,11 @@ void usage(FILE *f)
         "  --no-run             only load (and write the replay folder)\n"
         "  --opencv-ref         also run plain OpenCV stereo odometry (rectified pairs only)\n"
         "                       as a yardstick of the ground truth\n"
+        "  --direct-ref         also run dense direct stereo odometry (rp_direct.hpp:\n"
+        "                       SGBM depth + photometric alignment, no features; rectified\n"
+        "                       pairs only, about 1 s per frame) as a second yardstick\n"
+        "  --steps              print each frame-to-frame step (length, rotation, direction)\n"
+        "                       of the truth, rigpose and the yardsticks run\n"
         "profile overrides: --q-trans Q --q-rot Q --sigma-px S --features N --levels L --win W\n"
         "  --min-dist D --grid X,Y --max-depth M --match-depth MIN,MAX --match-win H\n"
         "  --match-zncc Z --match-subpix N --fb-max PX --min-tracked N --refine 0|1\n"
@@ -364,6 +408,7 @@ int main(int argc, char **argv)
     std::string kitti, euroc, name, json_out, replay_out;
     size_t frames = 0, first = 0;
     bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
+    bool direct_ref = false, steps = false;
     double check_m = -1.0, check_pct = -1.0;
     std::vector<std::pair<std::string, std::string>> over;
     for (int i = 1; i < argc; ++i) {
@@ -380,6 +425,10 @@ int main(int argc, char **argv)
             no_run = true;
         } else if (a == "--opencv-ref") {
             opencv_ref = true;
+        } else if (a == "--direct-ref") {
+            direct_ref = true;
+        } else if (a == "--steps") {
+            steps = true;
         } else if (!has_val) {
             std::fprintf(stderr, "rigpose-realdata: %s: unknown option or missing value\n",
                          a.c_str());
@@ -562,10 +611,10 @@ int main(int argc, char **argv)
     std::printf("| frame-to-frame drift (RPE / path) | %.3f %% |\n", s.rpe_percent);
     std::printf("| frames lost / re-initialised | %zu / %zu |\n", lost, reinit);
     std::printf("| pipeline time per frame set | %.2f ms |\n", ms);
-    rprd::Summary ref;
+    rprd::Summary ref, dref;
     const bool rectified = is_kitti;
+    std::vector<rprd::Pose> traj, dtraj;
     if (opencv_ref && rectified) {
-        std::vector<rprd::Pose> traj;
         if (opencv_reference(seq, &traj)) {
             ref = rprd::summarise(traj, seq.truth);
             std::printf("| yardstick: OpenCV frame-to-frame stereo PnP, ATE / path | %.3f %% "
@@ -573,7 +622,22 @@ int main(int argc, char **argv)
                         ref.ate_percent, ref.ate_m, ref.rpe_percent);
         } else {
             std::printf("yardstick: OpenCV stereo odometry failed\n");
+            traj.clear();
         }
+    }
+    if (direct_ref) {
+        if (rprd::direct_reference(seq, rprd::DirectOpts(), &dtraj, nullptr, &err)) {
+            dref = rprd::summarise(dtraj, seq.truth);
+            std::printf("| yardstick 2: dense direct stereo odometry, ATE / path | %.3f %% "
+                        "(%.4f m) |\n| yardstick 2: its RPE / path | %.3f %% |\n",
+                        dref.ate_percent, dref.ate_m, dref.rpe_percent);
+        } else {
+            std::printf("%s\n", err.c_str());
+            dtraj.clear();
+        }
+    }
+    if (steps) {
+        print_steps(seq, est_pose, traj, dtraj);
     }
     if (!json_out.empty()) {
         FILE *f = std::fopen(json_out.c_str(), "w");
@@ -593,6 +657,12 @@ int main(int argc, char **argv)
                          ", \"%s_opencv_ref_ate_percent\": %.6f, \"%s_opencv_ref_rpe_percent\": "
                          "%.5f",
                          n, ref.ate_percent, n, ref.rpe_percent);
+        }
+        if (dref.frames) {
+            std::fprintf(f,
+                         ", \"%s_direct_ref_ate_percent\": %.6f, \"%s_direct_ref_rpe_percent\": "
+                         "%.5f",
+                         n, dref.ate_percent, n, dref.rpe_percent);
         }
         std::fprintf(f, "}\n");
         std::fclose(f);

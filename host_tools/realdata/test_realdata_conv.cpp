@@ -1,8 +1,9 @@
 /*
  * test_realdata_conv.cpp - rp_realdata's conversions and scoring, and (when the data is there)
  * its loaders: pose vector round trip in the paper's angles, transform algebra, the ATE / RPE
- * of a known error, the KITTI and EuRoC rigs and first frames. Run by `make test`; prints one
- * line per check and a cmocka-style summary.
+ * of a known error, the KITTI and EuRoC rigs and first frames, and the dense direct yardstick
+ * (rp_direct.hpp) on a few KITTI frames. Run by `make test`; prints one line per check and a
+ * cmocka-style summary.
  */
 #include <cmath>
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include <string>
 #include <sys/stat.h>
 
+#include "rp_direct.hpp"
 #include "rp_realdata.hpp"
 
 namespace {
@@ -32,6 +34,70 @@ double pose_diff(const rprd::Pose &a, const rprd::Pose &b)
         d = std::fmax(d, std::fabs(a.t[i] - b.t[i]));
     }
     return d;
+}
+
+double length(const rprd::Pose &T)
+{
+    return std::sqrt(T.t[0] * T.t[0] + T.t[1] * T.t[1] + T.t[2] * T.t[2]);
+}
+
+/* Rotation angle of a pose, degrees. */
+double angle_deg(const rprd::Pose &T)
+{
+    const double c = (T.R[0] + T.R[4] + T.R[8] - 1.0) / 2.0;
+    return std::acos(std::fmin(1.0, std::fmax(-1.0, c))) * 180.0 / M_PI;
+}
+
+/* The dense direct yardstick on KITTI: 3 steps of frames 20-23 (where the truth is a real
+ * measurement) agree with the truth, whatever the start; 3 steps of frames 0-3 do not (the
+ * truth's extrapolated start, README.md); a distorted pair is refused. */
+void check_direct(const std::string &kitti, const rprd::Sequence &euroc)
+{
+    rprd::Sequence k;
+    std::string err;
+    if (!rprd::load_kitti(kitti, 20, 4, &k, &err)) {
+        check(false, ("direct: KITTI frames 20-23: " + err).c_str(), 0.0);
+        return;
+    }
+    rprd::DirectOpts o;
+    std::vector<rprd::Pose> traj, steps, traj2, steps2;
+    const bool ok = rprd::direct_reference(k, o, &traj, &steps, &err);
+    o.start_step_m = 0.3;
+    const bool ok2 = rprd::direct_reference(k, o, &traj2, &steps2, &err);
+    check(ok && ok2 && steps.size() == 3 && traj.size() == 4, "direct: 3 steps, 4 poses", 0.0);
+    if (!ok || !ok2 || steps.size() != 3) {
+        return;
+    }
+    double worst_len = 0.0, worst_rot = 0.0, worst_start = 0.0;
+    for (size_t j = 1; j < 4; ++j) {
+        const rprd::Pose truth = rprd::pose_mul(rprd::pose_inv(k.truth[j - 1]), k.truth[j]);
+        const rprd::Pose est = rprd::pose_inv(steps[j - 1]);
+        worst_len = std::fmax(worst_len, std::fabs(length(est) / length(truth) - 1.0));
+        worst_rot = std::fmax(worst_rot, angle_deg(rprd::pose_mul(rprd::pose_inv(est), truth)));
+        worst_start = std::fmax(worst_start, pose_diff(steps[j - 1], steps2[j - 1]));
+    }
+    check(worst_len < 0.02, "direct: KITTI steps 20-23 within 2 % of the truth's length",
+          worst_len);
+    check(worst_rot < 0.05, "direct: ... and within 0.05 deg of its rotation", worst_rot);
+    check(worst_start < 1e-4, "direct: same steps from a 0.3 m start as from 0.75 m",
+          worst_start);
+    rprd::Sequence s0;
+    if (rprd::load_kitti(kitti, 0, 4, &s0, &err) &&
+        rprd::direct_reference(s0, rprd::DirectOpts(), &traj, &steps, &err)) {
+        double longest = 0.0, truth_shortest = 1e9;
+        for (size_t j = 1; j < 4; ++j) {
+            longest = std::fmax(longest, length(steps[j - 1]));
+            truth_shortest = std::fmin(
+                truth_shortest, length(rprd::pose_mul(rprd::pose_inv(s0.truth[j - 1]), s0.truth[j])));
+        }
+        check(longest < 0.75 && truth_shortest > 0.85,
+              "direct: KITTI frames 0-3: images under 0.75 m a step, truth over 0.85 m", longest);
+    } else {
+        check(false, ("direct: KITTI frames 0-3: " + err).c_str(), 0.0);
+    }
+    err.clear();
+    const bool refused = !rprd::direct_reference(euroc, rprd::DirectOpts(), &traj, nullptr, &err);
+    check(refused && !err.empty(), ("direct: a distorted pair is refused: " + err).c_str(), 0.0);
 }
 
 bool is_dir(const std::string &p)
@@ -103,6 +169,9 @@ int main()
                   pose_diff(e.truth[0], rprd::Pose()));
             check(e.utime[1] - e.utime[0] == 50000, "EuRoC: 20 Hz",
                   (double)(e.utime[1] - e.utime[0]));
+        }
+        if (ok_e) {
+            check_direct(data + "/kitti00_000-099", e);
         }
         rprd::Sequence bad;
         err.clear();
