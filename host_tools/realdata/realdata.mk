@@ -56,7 +56,7 @@ $(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
 	@mkdir -p $(BUILD)/bench
 	@if [ -d "$(RD_DATA)/kitti00_000-099" ] && [ -d "$(RD_DATA)/euroc_mh01_000-149" ]; then \
 	  $(RD_BIN) --kitti $(RD_DATA)/kitti00_000-099 --frames $(RD_BENCH_KITTI) --quiet --opencv-ref \
-	      --direct-ref \
+	      --direct-ref --splice 14 \
 	      --json-out $(RD_DIR)/kitti00.json && \
 	  $(RD_BIN) --kitti $(RD_DATA)/kitti00_000-099 --first 14 --frames $(RD_BENCH_KITTI) --quiet \
 	      --opencv-ref --direct-ref --name kitti00_from14 --json-out $(RD_DIR)/kitti00_from14.json && \
