@@ -395,6 +395,8 @@ void usage(FILE *f)
         "                       pairs only, about 1 s per frame) as a second yardstick\n"
         "  --steps              print each frame-to-frame step (length, rotation, direction)\n"
         "                       of the truth, rigpose and the yardsticks run\n"
+        "  --direct-rows A,B    the direct yardstick uses image rows A..B-1 only (e.g. the\n"
+        "                       road below the horizon, or the scene above it)\n"
         "  --splice K           with --direct-ref: also score the yardstick's steps up to\n"
         "                       frame K followed by the truth's own steps (what an estimator\n"
         "                       exact from frame K on but true to the images before scores)\n"
@@ -413,6 +415,7 @@ int main(int argc, char **argv)
     bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
     bool direct_ref = false, steps = false;
     size_t splice = 0;
+    rprd::DirectOpts dopts;
     double check_m = -1.0, check_pct = -1.0;
     std::vector<std::pair<std::string, std::string>> over;
     for (int i = 1; i < argc; ++i) {
@@ -452,6 +455,12 @@ int main(int argc, char **argv)
             json_out = argv[++i];
         } else if (a == "--replay-out") {
             replay_out = argv[++i];
+        } else if (a == "--direct-rows") {
+            if (std::sscanf(argv[++i], "%d,%d", &dopts.row_min, &dopts.row_max) != 2 ||
+                dopts.row_min < 0 || dopts.row_max <= dopts.row_min) {
+                std::fprintf(stderr, "rigpose-realdata: --direct-rows A,B with 0 <= A < B\n");
+                return 2;
+            }
         } else if (a == "--splice") {
             splice = (size_t)std::strtoul(argv[++i], nullptr, 10);
         } else if (a == "--check-ate-m") {
@@ -632,7 +641,7 @@ int main(int argc, char **argv)
         }
     }
     if (direct_ref) {
-        if (rprd::direct_reference(seq, rprd::DirectOpts(), &dtraj, nullptr, &err)) {
+        if (rprd::direct_reference(seq, dopts, &dtraj, nullptr, &err)) {
             dref = rprd::summarise(dtraj, seq.truth);
             std::printf("| yardstick 2: dense direct stereo odometry, ATE / path | %.3f %% "
                         "(%.4f m) |\n| yardstick 2: its RPE / path | %.3f %% |\n",

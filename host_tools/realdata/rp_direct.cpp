@@ -144,7 +144,7 @@ Pose align(const cv::Mat &ref, const cv::Mat &disp, const cv::Mat &next, const I
                 }
                 const int X0 = (int)std::lround((x + 0.5) / s - 0.5);
                 const int Y0 = (int)std::lround((y + 0.5) / s - 0.5);
-                if (X0 >= disp.cols || Y0 >= disp.rows) {
+                if (X0 >= disp.cols || Y0 >= disp.rows || Y0 < o.row_min || Y0 >= o.row_max) {
                     continue;
                 }
                 const double dv = disp.at<float>(Y0, X0);

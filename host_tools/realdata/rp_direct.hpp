@@ -29,6 +29,8 @@ struct DirectOpts {
     int levels = 5;             /* pyramid levels (the largest flows near the car are ~60 px) */
     int iterations = 30;        /* Gauss-Newton iterations per level at most */
     double start_step_m = 0.75; /* initial forward step (the result does not depend on it) */
+    int row_min = 0;            /* only pixels of rows row_min..row_max - 1 (full size) are */
+    int row_max = 1 << 30;      /* used: e.g. the road alone, or everything above it */
 };
 
 /* Chains the frame-to-frame motions of seq (rectified pair: camera 1 at (b, 0, 0), same
