@@ -62,6 +62,9 @@ typedef struct {
     rp_vo_stereo_cfg_t cfg;
     rp_stereo_pair_t pair[RP_MAX_PAIRS];
     rp_ekf_t ekf;
+    rp_ekf_t ekf_pred;                  /* scratch: the prediction, for a retried update */
+    uint32_t n_retried;                 /* updates redone because the gate rejected most of a
+                                         * pair (rp_vo_stereo.c, predict_update) */
     rp_idmap_t map;                     /* feature id -> slot in lm; group = the pair that
                                          * triangulated it; mark = observed (and not gated)
                                          * in the current frame */
