@@ -9,6 +9,26 @@
 
 #include "rigpose/rp_track.h"
 
+/* The tracker built a second time with plain-C lane groups (RP_TRACK_SCALAR), its public
+ * functions renamed, to hold the library's vector kernels (SSE2 / NEON) to bit-identical results
+ * (test_vector_equals_scalar). */
+#define RP_TRACK_SCALAR 1
+#define rp_track_default_cfg rp_track_default_cfg_scalar
+#define rp_track_init rp_track_init_scalar
+#define rp_track_process rp_track_process_scalar
+#define rp_pyr_build rp_pyr_build_scalar
+#include "../core/src/rp_track.c"
+#undef rp_track_default_cfg
+#undef rp_track_init
+#undef rp_track_process
+#undef rp_pyr_build
+rp_status_t rp_track_default_cfg_scalar(rp_track_cfg_t *cfg);
+rp_status_t rp_track_init_scalar(rp_tracker_t *trk, const rp_track_cfg_t *cfg);
+rp_status_t rp_track_process_scalar(rp_tracker_t *trk, const rp_image_t *img, int64_t utime,
+                                    rp_feat_t *out, uint16_t cap, uint16_t *n_out,
+                                    rp_track_info_t *info);
+rp_status_t rp_pyr_build_scalar(rp_pyr_t *pyr, const rp_image_t *img, uint8_t levels);
+
 #define W 320
 #define H 240
 #define NWAVE 24
@@ -460,6 +480,62 @@ static void test_topup_refills_emptied_cells(void **s)
     assert_true(new_total > 0 && new_right >= new_total / 2);
 }
 
+/* Given a textured scene moving (sub-pixel shifts, up to 9 px a frame, a blank frame, a jump that
+ * loses tracks at the border), then the library's tracker (vector kernels where the compiler has
+ * them) and the plain-C build give bit-identical pyramids, features, positions and events. */
+static void test_vector_equals_scalar(void **s)
+{
+    (void)s;
+    static rp_tracker_t tv, ts;
+    static rp_pyr_t pv, ps;
+    static rp_feat_t fv[RP_MAX_FEATS_PER_CAM], fs[RP_MAX_FEATS_PER_CAM];
+    static const double shift[][2] = {{0, 0},     {0.37, -0.21}, {3.9, 2.2},  {-8.7, 5.3},
+                                      {-8.7, 5.3}, {0.1, 9.05},  {-30.5, 1.25}, {-31.0, 2.0}};
+    texture_t t;
+    texture_make(&t);
+    /* pyramid of an odd-sized image (row tails and reflected borders) */
+    render(&t, 0.3, 0.6, img0);
+    const rp_image_t odd = view(img0, 101, 75);
+    assert_ok(rp_pyr_build(&pv, &odd, 4));
+    assert_ok(rp_pyr_build_scalar(&ps, &odd, 4));
+    assert_int_equal(pv.n_lev, ps.n_lev);
+    const uint32_t bytes = pv.lev[pv.n_lev - 1].off +
+                           (uint32_t)pv.lev[pv.n_lev - 1].w * pv.lev[pv.n_lev - 1].h;
+    assert_memory_equal(pv.pix, ps.pix, bytes);
+
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    assert_ok(rp_track_init(&tv, &cfg));
+    assert_ok(rp_track_init_scalar(&ts, &cfg));
+    int total = 0;
+    for (unsigned k = 0; k < sizeof(shift) / sizeof(shift[0]) + 1; ++k) {
+        if (k == 4) {
+            memset(img1, 77, sizeof(img1)); /* blank: skipped by both */
+        } else {
+            const unsigned j = k < 4 ? k : k - 1;
+            render(&t, shift[j][0], shift[j][1], img1);
+        }
+        const rp_image_t im = view(img1, W, H);
+        uint16_t nv = 0, ns = 0;
+        rp_track_info_t iv, is;
+        const rp_status_t sv =
+            rp_track_process(&tv, &im, (int64_t)k * 33000, fv, RP_MAX_FEATS_PER_CAM, &nv, &iv);
+        const rp_status_t ss = rp_track_process_scalar(&ts, &im, (int64_t)k * 33000, fs,
+                                                       RP_MAX_FEATS_PER_CAM, &ns, &is);
+        assert_int_equal(sv, ss);
+        assert_int_equal(nv, ns);
+        assert_memory_equal(&iv, &is, sizeof(iv));
+        for (int i = 0; i < nv; ++i) {
+            assert_int_equal(fv[i].id, fs[i].id);
+            assert_true(fv[i].uv[0] == fs[i].uv[0] && fv[i].uv[1] == fs[i].uv[1]);
+        }
+        assert_memory_equal(tv.pos_q16, ts.pos_q16, sizeof(tv.pos_q16[0]) * tv.n);
+        total += nv;
+    }
+    print_message("vector == scalar over %d features\n", total);
+    assert_true(total > 500);
+}
+
 /* The tracker's state: two pyramids and small row rings, no full-frame response map. */
 static void test_state_size(void **s)
 {
@@ -487,6 +563,7 @@ int main(void)
         cmocka_unit_test(test_tiny_image),
         cmocka_unit_test(test_topup_refills_emptied_cells),
         cmocka_unit_test(test_state_size),
+        cmocka_unit_test(test_vector_equals_scalar),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

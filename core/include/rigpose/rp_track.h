@@ -12,11 +12,16 @@
  *               (results within about 0.001 px of OpenCV's Q14 weights, tests/oracle_track.cpp)
  *   sums        int32 over chunks of at most 64 window pixels (|product| < 2^25), then int64
  *               (structure tensor, mismatch vector); detection responses int32
- * Speed: window rows are padded to multiples of 8 pixels and every inner loop runs over whole
- * blocks of 8, which compilers vectorise at -O2 (SSE2, NEON); plain C, no intrinsics. The
- * backward check uses only the pyramid levels the forward displacement needs; coarse levels stop
- * at 16x the convergence step; detection streams rows (no full-frame response map) and, on
- * top-up, searches only the cells that lack features.
+ * Speed: window rows are padded to multiples of 8 pixels and every inner loop runs over lane
+ * groups of 8 int16 (GCC vector extensions on SSE2 / NEON, plain C elsewhere; bit-identical,
+ * tests/test_track.c); interpolation and gradients run column group by column group with the rows
+ * rolling in registers, straight from the pyramid away from the border. After the first 2 tracks
+ * of a frame, a track starts from the displacement of the nearest track that passed before it
+ * (its bucketing cell and the 8 around it) on the finest level only, and falls back to all levels
+ * from zero motion if that fails; the backward check starts at the original position on the finest
+ * level and carries the residual test. Coarse levels stop at 16x the convergence step; detection
+ * streams rows (no full-frame response map) and, on top-up, searches only the cells that lack
+ * features.
  */
 #ifndef RP_TRACK_H
 #define RP_TRACK_H
@@ -118,8 +123,9 @@ typedef struct {
     rp_track_cand_t cand[RP_TRACK_MAX_CELLS][RP_TRACK_CELL_CANDS];
     uint16_t n_cand[RP_TRACK_MAX_CELLS];
     rp_track_cand_t list[RP_TRACK_MAX_CELLS * RP_TRACK_CELL_CANDS];
-    /* scratch of tracking */
-    int32_t fwd_q16[RP_MAX_FEATS_PER_CAM][2];
+    /* scratch of tracking: level-0 displacement of track k over the last frame, Q16 px (valid for
+     * the tracks that survived it; the flow guess of the tracks after it in the same frame) */
+    int32_t flow_q16[RP_MAX_FEATS_PER_CAM][2];
 } rp_tracker_t;
 
 /* Defaults like OpenCV's: 21x21 window, 4 levels (maxLevel 3), 30 iterations, eps 0.01 px,
