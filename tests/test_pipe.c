@@ -3,7 +3,8 @@
  * (320x240, f = 400 px) moving through a textured room (img_fixture.h) go through trackers,
  * stereo matching and the estimators; the pose follows the known motion for stereo4, stereo2
  * and gc; pairs share ids; a missing, blank, truncated or wrongly sized image degrades the step
- * with its state instead of failing it; bad calls give their status.
+ * with its state instead of failing it; bad calls give their status. Feature-level input
+ * (rp_pipe_step_feats) is the layout's estimator on the simulation's frame sets.
  */
 #include <string.h>
 #include <time.h>
@@ -332,6 +333,70 @@ static void test_bad_calls(void **state)
     assert_status(rp_pipe_info(NULL, NULL), RP_E_ARG);
 }
 
+/* Feature-level input: rp_pipe_step_feats gives exactly what the layout's estimator gives on
+ * the same frame sets (stereo4 against rp_vo_stereo, gc against rp_vo_gc, 12 frame sets of
+ * run 0 of the simulation seeded 3), keeps the frame set and reports the cameras; a repeated
+ * time and bad calls give their status. */
+static void test_step_feats_is_the_layouts_estimator(void **state)
+{
+    (void)state;
+    rp_sim_cfg_t sc;
+    rp_sim_default_cfg(&sc);
+    sc.n_frames = 12;
+    static rp_sim_run_t sr;
+    static rp_frameset_t fs;
+    static rp_vo_stereo_t vs;
+    static rp_vo_gc_t vg;
+    assert_int_equal(rp_sim_run_init(&sr, &sc, 3, 0), 0);
+    static const rp_pipe_layout_t layouts[2] = {RP_PIPE_STEREO4, RP_PIPE_GC};
+    for (int l = 0; l < 2; ++l) {
+        rp_pipe_cfg_t cfg;
+        assert_ok(rp_pipe_default_cfg(layouts[l], &cfg));
+        cfg.gc = rp_sim_gc_cfg(&sc); /* features born at the simulation's shell */
+        assert_ok(rp_pipe_init(&pipe, &sr.rig, &cfg));
+        if (l == 0) {
+            assert_ok(rp_vo_stereo_init(&vs, &sr.rig, &cfg.stereo));
+        } else {
+            assert_ok(rp_vo_gc_init(&vg, &sr.rig, &cfg.gc));
+        }
+        rp_estimate_t e_pipe, e_est;
+        for (uint32_t j = 0; j < sc.n_frames; ++j) {
+            rp_sim_frame(&sr, j, &fs);
+            const rp_status_t st = rp_pipe_step_feats(&pipe, &fs, &e_pipe);
+            assert_int_equal(st, l == 0 ? rp_vo_stereo_step(&vs, &fs, &e_est)
+                                        : rp_vo_gc_step(&vg, &fs, &e_est));
+            assert_ok(st);
+            assert_memory_equal(e_pipe.p, e_est.p, sizeof(e_est.p));
+            assert_int_equal(e_pipe.flags, e_est.flags);
+            const rp_frameset_t *kept;
+            const rp_pipe_info_t *info;
+            assert_ok(rp_pipe_frameset(&pipe, &kept));
+            assert_ok(rp_pipe_info(&pipe, &info));
+            assert_memory_equal(kept->n, fs.n, sizeof(fs.n));
+            assert_int_equal(info->frame, j + 1);
+            assert_int_equal(info->cam_state[0], RP_PIPE_CAM_OK);
+            assert_int_equal(info->cam_state[RP_SIM_CAM1B], l == 0 ? RP_PIPE_CAM_OK
+                                                                   : RP_PIPE_CAM_UNUSED);
+        }
+        double te = 0;
+        for (int i = 0; i < 3; ++i) {
+            te = fmax(te, fabs((double)e_pipe.p[i] - sr.truth[6u * (sc.n_frames - 1) + i]));
+        }
+        printf("  %s from features: last frame error %.6f m\n", rp_pipe_layout_name(layouts[l]),
+               te);
+        assert_true(te < 0.01);
+    }
+    /* the same time again: nothing done, the last estimate marked lost */
+    rp_estimate_t est;
+    assert_status(rp_pipe_step_feats(&pipe, &fs, &est), RP_E_RANGE);
+    assert_true(est.flags & RP_EST_LOST);
+    assert_status(rp_pipe_step_feats(&pipe, NULL, &est), RP_E_ARG);
+    assert_true(est.flags & RP_EST_LOST);
+    assert_status(rp_pipe_step_feats(&pipe, &fs, NULL), RP_E_ARG);
+    assert_status(rp_pipe_step_feats(NULL, &fs, &est), RP_E_ARG);
+    rp_sim_run_free(&sr);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -342,6 +407,7 @@ int main(void)
         cmocka_unit_test(test_single_camera_and_rc_run),
         cmocka_unit_test(test_bad_images_give_states),
         cmocka_unit_test(test_bad_calls),
+        cmocka_unit_test(test_step_feats_is_the_layouts_estimator),
     };
     return cmocka_run_group_tests(tests, setup_frames, NULL);
 }

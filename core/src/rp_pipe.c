@@ -333,16 +333,20 @@ static rp_status_t rc_step(rp_pipe_t *pipe, rp_estimate_t *est)
 {
     rp_real p_own[RP_RC_MAX_CAMS][6];
     rp_status_t st_ref = RP_OK;
+    uint16_t n_used[RP_MAX_CAMS] = {0};
     for (uint8_t i = 0; i < RP_RC_MAX_CAMS; ++i) {
         rp_estimate_t rig_est, own;
+        const uint8_t cam = pipe->cfg.rc_cams[i];
         const rp_status_t st = rp_vo_mono_step(&pipe->est.single.mono[i], &pipe->fs, &rig_est,
                                                &own);
         if (i == 0) {
             st_ref = st;
             *est = own; /* the reference camera's own pose is the rig pose up to scale */
         }
+        n_used[cam] = rig_est.n_used[cam];
         memcpy(p_own[i], own.p, sizeof(p_own[i]));
     }
+    memcpy(est->n_used, n_used, sizeof(n_used));
     rp_real s[RP_RC_MAX_CAMS];
     uint32_t flags = est->flags & ~(uint32_t)RP_EST_SCALE_WEAK;
     if (rp_rc_fuse(pipe->rig, pipe->cfg.rc_cams, RP_RC_MAX_CAMS, (const rp_real(*)[6])p_own,
@@ -368,11 +372,11 @@ static rp_status_t run_estimator(rp_pipe_t *pipe, rp_estimate_t *est)
     return rc_step(pipe, est);
 }
 
-rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
-                         int64_t utime, rp_estimate_t *est)
+/* The checks every step starts with (arguments, time order); on success a fresh report for
+ * this step. RP_OK or the status to return (est then filled as rp_pipe.h says). */
+static rp_status_t step_begin(rp_pipe_t *pipe, int args_ok, int64_t utime, rp_estimate_t *est)
 {
-    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || images == NULL || est == NULL ||
-        n > RP_MAX_CAMS) {
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || !args_ok || est == NULL) {
         if (est != NULL) {
             memset(est, 0, sizeof(*est));
             est->flags = RP_EST_LOST;
@@ -389,6 +393,17 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
     memset(info, 0, sizeof(*info));
     info->frame = frame + 1;
     pipe->last_utime = utime;
+    return RP_OK;
+}
+
+rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
+                         int64_t utime, rp_estimate_t *est)
+{
+    const rp_status_t st0 = step_begin(pipe, images != NULL && n <= RP_MAX_CAMS, utime, est);
+    if (st0 != RP_OK) {
+        return st0;
+    }
+    rp_pipe_info_t *info = &pipe->info;
     memset(pipe->fs.n, 0, sizeof(pipe->fs.n));
     pipe->fs.utime = utime;
 
@@ -423,6 +438,23 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
         est->flags |= RP_EST_DEGRADED;
     }
     info->est_status = st;
+    pipe->last = *est;
+    return st;
+}
+
+rp_status_t rp_pipe_step_feats(rp_pipe_t *pipe, const rp_frameset_t *fs, rp_estimate_t *est)
+{
+    const rp_status_t st0 = step_begin(pipe, fs != NULL, fs != NULL ? fs->utime : 0, est);
+    if (st0 != RP_OK) {
+        return st0;
+    }
+    pipe->fs = *fs;
+    for (uint8_t t = 0; t < pipe->n_trk; ++t) {
+        const uint8_t cam = pipe->trk_cam[t];
+        pipe->info.cam_state[cam] = fs->n[cam] > 0 ? RP_PIPE_CAM_OK : RP_PIPE_CAM_NO_FEATURES;
+    }
+    const rp_status_t st = run_estimator(pipe, est);
+    pipe->info.est_status = st;
     pipe->last = *est;
     return st;
 }

@@ -24,8 +24,14 @@
  * these whenever it (re-)initialises (its backtracking uses the previous frame set, which
  * carries them too). Matching costs only at births, not every frame.
  *
- * Memory: rp_pipe_t holds RP_PIPE_MAX_TRACKERS trackers (each two pyramids and a response map:
- * about 2 MB at 640x480) and the estimator: allocate it statically (`static rp_pipe_t pipe;`).
+ * Memory: rp_pipe_t holds RP_PIPE_MAX_TRACKERS trackers (each two pyramids and a response map
+ * at the tracker's size limits: sizeof(rp_tracker_t) is 0.90 MB at the default 640x480) and
+ * the estimator: 4.4 MB in all with double rp_real, 4.1 MB with float. Allocate it statically
+ * (`static rp_pipe_t pipe;`).
+ *
+ * Feature-level input: rp_pipe_step_feats runs the layout's estimator on a frame set built
+ * elsewhere (a simulator, another tracker, a log), so a program with both kinds of source
+ * keeps one estimator dispatch.
  */
 #ifndef RP_PIPE_H
 #define RP_PIPE_H
@@ -175,6 +181,21 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
  *   otherwise       an estimator's error (rp_vo_*_step), est as it filled it. */
 rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
                          int64_t utime, rp_estimate_t *est);
+
+/* Feature-level input: run the layout's estimator on fs, a frame set of features built
+ * elsewhere (rp_frame.h; ids shared between the cameras of a stereo pair), skipping the
+ * trackers and the matcher. Feed one pipeline either images (rp_pipe_step) or frame sets
+ * (this), not both: the trackers do not see the frame sets given here. est (required) receives
+ * the estimate with the estimator's own flags. rp_pipe_frameset then returns a copy of fs, and
+ * rp_pipe_info marks each camera of the layout RP_PIPE_CAM_OK (features) or
+ * RP_PIPE_CAM_NO_FEATURES, with the estimator's status.
+ * Returns the estimator's status as rp_pipe_step does (RP_OK, RP_E_TOO_FEW, RP_E_DIVERGED, its
+ * RP_E_ARG for a malformed frame set), or:
+ *   RP_E_RANGE  fs->utime not after the previous frame set's: nothing done, est = the last
+ *               estimate with RP_EST_LOST
+ *   RP_E_ARG    NULL pipe, fs or est, or pipe not initialised: nothing done (est, if given,
+ *               zeroed with RP_EST_LOST). */
+rp_status_t rp_pipe_step_feats(rp_pipe_t *pipe, const rp_frameset_t *fs, rp_estimate_t *est);
 
 /* The last frame set of features (what the estimator received). RP_E_ARG: NULL or not
  * initialised. Before the first step: an empty frame set. */

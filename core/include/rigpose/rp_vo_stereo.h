@@ -10,7 +10,11 @@
  *     estimate, then processes the current frame with them.
  *  2. At the second frame the pose EKF is started from Lowe's method on all correspondences.
  *  3. Every later frame: EKF prediction, then the iterated update with the pixels of every
- *     tracked landmark in every camera of the layout (eqs. 1-2).
+ *     tracked landmark in every camera of the layout (eqs. 1-2). (beyond the paper) If the
+ *     update's Mahalanobis gate rejects most of one pair's observations, the prediction was
+ *     off along a direction the other pair hardly sees: the update is redone from the same
+ *     prediction with its pose covariance widened by the gap to Lowe's pose from all
+ *     observations, and kept if it uses more of them (n_retried counts these).
  *  4. (beyond the paper) Each landmark's structure EKF takes the frame's observations at the
  *     updated pose, so the structure improves instead of staying at its first triangulation.
  *  A landmark missing from a frame (its track lost in both cameras) is dropped for good.
