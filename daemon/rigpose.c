@@ -6,9 +6,10 @@
  * Each frame set from the configured source becomes one rigpose.pose_t on the pose channel;
  * a rigpose.status_t goes out every lcm.status_every sets and whenever a camera changes state.
  * Sources that deliver images (v4l2, replay) go through the core's image pipeline (rp_pipe.h);
- * the sim source delivers features, which go to the estimator directly. With a source that
- * knows the truth (sim), every printed pose carries its error against it, and the run ends
- * with the mean absolute error per axis (as Table 1 of the paper reports it).
+ * the sim source delivers features, which go to the same pipeline's estimator directly
+ * (rp_est.h). With a source that knows the truth (sim), every printed pose carries its error
+ * against it, and the run ends with the mean absolute error per axis (as Table 1 of the paper
+ * reports it).
  *
  * Exit codes (daemon/README.md):
  *   0  done: --frames reached, the source ended, or SIGINT / SIGTERM
@@ -105,8 +106,7 @@ typedef struct {
 
 static volatile sig_atomic_t g_stop;
 static rp_config_t g_cfg;
-static rp_est_t g_est;      /* feature sources */
-static rp_pipe_t g_pipe;    /* image sources */
+static rp_est_t g_est;      /* the image pipeline: images, or features from the sim source */
 static rp_hal_set_t g_set;
 static float g_lat_ms[LAT_KEEP];
 static uint8_t g_img_buf[RP_HAL_MAX_W * RP_HAL_MAX_H]; /* an image with padded rows, packed */
@@ -304,22 +304,7 @@ static void source_close(source_t *s)
 
 static rp_status_t estimator_init(const rp_config_t *cfg)
 {
-    if (cfg->hal.kind == RP_HAL_SRC_SIM) {
-        return rp_est_init(&g_est, cfg);
-    }
-    static rp_pipe_cfg_t pc;
-    rp_status_t st = rp_pipe_default_cfg((rp_pipe_layout_t)cfg->method, &pc);
-    if (st != RP_OK) {
-        return st;
-    }
-    pc.track = cfg->track;
-    pc.stereo = cfg->stereo;
-    pc.gc = cfg->gc;
-    pc.mono = cfg->mono[0];
-    for (uint8_t i = 0; i < cfg->n_mono && i < RP_RC_MAX_CAMS; ++i) {
-        pc.rc_cams[i] = cfg->mono[i].cam;
-    }
-    return rp_pipe_init(&g_pipe, &cfg->rig, &pc);
+    return rp_est_init(&g_est, cfg);
 }
 
 /* Run the estimator on one set; fs_out receives the features it used (for the status). */
@@ -334,11 +319,7 @@ static rp_status_t estimator_step(const rp_hal_set_t *set, rp_estimate_t *est,
     for (uint8_t k = 0; k < RP_MAX_CAMS; ++k) {
         img[k] = (k < set->n_cams && set->cam[k].img.data != NULL) ? &set->cam[k].img : NULL;
     }
-    const rp_status_t st = rp_pipe_step(&g_pipe, img, set->n_cams, set->utime, est);
-    if (rp_pipe_frameset(&g_pipe, fs_out) != RP_OK) {
-        *fs_out = NULL;
-    }
-    return st;
+    return rp_est_step_images(&g_est, img, set->n_cams, set->utime, est, fs_out);
 }
 
 /* ---- messages ---------------------------------------------------------------------------------- */

@@ -1,41 +1,34 @@
 /*
- * rp_est.h - the daemon's estimator for sources that deliver features (the sim source): the
- * configured method (rp_config_t.method) behind one init / step pair, over the core's
- * estimators. Sources that deliver images go through the core's image pipeline (rp_pipe.h)
- * instead, which runs the same estimators behind its trackers.
+ * rp_est.h - the daemon's estimator: the core's image pipeline (rp_pipe.h) set up from the
+ * configuration file. Sources that deliver images (v4l2, replay) go through its trackers and
+ * stereo matcher (rp_est_step_images); the sim source delivers features and goes straight to
+ * the same layout's estimator (rp_est_step). One estimator dispatch for both: rp_pipe's.
  */
 #ifndef RP_EST_H
 #define RP_EST_H
 
 #include "rigpose/rp_config.h"
 #include "rigpose/rp_frame.h"
-#include "rigpose/rp_rc.h"
-#include "rigpose/rp_vo_gc.h"
-#include "rigpose/rp_vo_mono.h"
-#include "rigpose/rp_vo_stereo.h"
+#include "rigpose/rp_pipe.h"
 
 typedef struct {
-    rp_method_t method;
-    const rp_rig_t *rig;
-    union {
-        rp_vo_stereo_t stereo;
-        rp_vo_gc_t gc;
-        struct {
-            rp_vo_mono_t mono[RP_RC_MAX_CAMS]; /* camK: mono[0]; rc: the four cameras */
-            uint8_t cams[RP_RC_MAX_CAMS];
-            uint8_t n;
-            rp_rc_params_t prm;
-            rp_real last_scale;                /* rc: last accepted S_j */
-        } single;
-    } u;
+    rp_pipe_t pipe; /* 4.1-4.4 MB at the default limits: keep an rp_est_t static */
 } rp_est_t;
 
-/* Set up est for cfg's method on cfg's rig (cfg must outlive est). The core's init status:
- * RP_E_ARG for a method / camera choice the estimator refuses, rp_rig_check's errors. */
+/* Set up est for cfg's method (layout), tracker, stereo, gc and mono settings on cfg's rig.
+ * rp_pipe_init's status: RP_E_ARG for a method / camera choice the estimator refuses,
+ * rp_rig_check's errors. */
 rp_status_t rp_est_init(rp_est_t *est, const rp_config_t *cfg);
 
-/* One frame set; out is always filled. The estimator's step status (rp_vo_*_step). For rc the
- * reference camera's step status; the fusion's degeneracy shows as RP_EST_SCALE_WEAK. */
+/* One frame set of features (sim source); out is always filled. rp_pipe_step_feats's status:
+ * the estimator's step status; for rc the reference camera's, the fusion's degeneracy shows as
+ * RP_EST_SCALE_WEAK; RP_E_RANGE for a frame set not after the previous one. */
 rp_status_t rp_est_step(rp_est_t *est, const rp_frameset_t *fs, rp_estimate_t *out);
+
+/* One set of images (n cameras, NULL for a missing one) through trackers, matcher and
+ * estimator; fs_out (optional) receives the features the estimator used, or NULL.
+ * rp_pipe_step's status. */
+rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], uint8_t n,
+                               int64_t utime, rp_estimate_t *out, const rp_frameset_t **fs_out);
 
 #endif /* RP_EST_H */
