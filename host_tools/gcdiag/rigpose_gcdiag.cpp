@@ -349,28 +349,19 @@ void surface_sim_mode(const rpr::SeqCfg &base, uint32_t first, uint32_t runs, do
         rc.run = r;
         rpr::Sequence seq(rc);
         std::mt19937_64 rng(rpr::key(rc.seed, r, 1234));
-        std::normal_distribution<double> g(0.0, 1.0);
         std::uniform_real_distribution<double> uni(0.0, 1.0);
-        std::vector<rp_real> pts;
-        for (int i = 0; i < 10000; ++i) {
-            double u[3] = {g(rng), g(rng), g(rng)}, M[3];
-            seq.scene().surface_point(u, M);
-            if (g_thick > 0.0) {
-                const double f = 1.0 + g_thick * (2.0 * uni(rng) - 1.0);
-                for (double &x : M) {
-                    x *= f;
-                }
-            }
+        std::vector<double> pts =
+            rpr::surface_points(seq.scene(), 10000, rpr::key(rc.seed, r, 0x5EF));
+        for (size_t i = 0; i < pts.size(); i += 3) {
+            double *M = &pts[i];
+            double f = g_thick > 0.0 ? 1.0 + g_thick * (2.0 * uni(rng) - 1.0) : 1.0;
             if (uni(rng) < shell_mix) {
                 const double n = std::sqrt(M[0] * M[0] + M[1] * M[1] + M[2] * M[2]);
-                const double rr = std::cbrt(0.667 * 0.667 * 0.667 +
-                                            uni(rng) * (1.0 - 0.667 * 0.667 * 0.667));
-                for (double &x : M) {
-                    x *= rr / n;
-                }
+                const double r3 = 0.667 * 0.667 * 0.667;
+                f = std::cbrt(r3 + uni(rng) * (1.0 - r3)) / n;
             }
-            for (double x : M) {
-                pts.push_back((rp_real)x);
+            for (int a = 0; a < 3; ++a) {
+                M[a] *= f;
             }
         }
         rp_sim_cfg_t sc;
@@ -381,32 +372,7 @@ void surface_sim_mode(const rpr::SeqCfg &base, uint32_t first, uint32_t runs, do
         Score one;
         std::vector<double> te, tt;
         for (uint32_t j = 0; j < rc.frames; ++j) {
-            rp_real tp[6];
-            for (int c = 0; c < 6; ++c) {
-                tp[c] = (rp_real)seq.truth(j)[c];
-            }
-            rp_pose_lin_t pl;
-            rp_pose_lin_set(&pl, tp);
-            std::memset(fs->n, 0, sizeof fs->n);
-            fs->utime = seq.utime(j);
-            for (int k = 0; k < 4; ++k) {
-                const rp_camera_t &cam = seq.rig().cam[k].cam;
-                for (int i = 0; i < 10000 && fs->n[k] < RP_MAX_FEATS_PER_CAM; ++i) {
-                    rp_real P[3], uv[2];
-                    if (rp_rig_cam_point(&seq.rig(), (uint8_t)k, &pl, &pts[3 * i], P) != RP_OK ||
-                        P[2] < (rp_real)0.05 ||
-                        rp_rig_project(&seq.rig(), (uint8_t)k, &pl, &pts[3 * i], uv, nullptr,
-                                       nullptr) != RP_OK ||
-                        !(uv[0] >= -0.5 && uv[0] < cam.width - 0.5 && uv[1] >= -0.5 &&
-                          uv[1] < cam.height - 0.5)) {
-                        continue;
-                    }
-                    rp_feat_t &f = fs->f[k][fs->n[k]++];
-                    f.id = (uint32_t)i;
-                    f.uv[0] = uv[0] + (rp_real)(noise_px * g(rng));
-                    f.uv[1] = uv[1] + (rp_real)(noise_px * g(rng));
-                }
-            }
+            rpr::surface_features(seq, pts, 4, j, noise_px, rpr::key(rc.seed, r, 0x5EF, 1), fs);
             rp_estimate_t est;
             const rp_status_t st = rp_vo_gc_step(gc, fs, &est);
             if (j > 0) {
