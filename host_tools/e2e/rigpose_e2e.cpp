@@ -8,7 +8,9 @@
  *
  * Beside each pixel-level row it prints the feature-level row of the same runs: the same
  * estimator configuration fed rigpose-sim's simulated features (rp_sim_frame: 10,000 shell
- * points, 0.5 px noise) along the same trajectories, and the ratio pixel / feature.
+ * points, 0.5 px noise) along the same trajectories, and the ratio pixel / feature; and the
+ * same feature model with the 10,000 points on the rendered surface (rpr::surface_features):
+ * the scene's own depths, which set gc's metric scale (host_tools/gcdiag/README.md).
  *
  * Run r of `--runs N` is run r of the experiment `--seed` (the motion of rigpose-sim's run r);
  * every method sees the same rendered images.
@@ -43,8 +45,9 @@ struct Method {
     /* accumulated over runs */
     double err[NCOL] = {0, 0, 0, 0, 0, 0};     /* pixel level: sums of absolute errors */
     double err_sim[NCOL] = {0, 0, 0, 0, 0, 0}; /* feature level, same runs */
+    double err_surf[NCOL] = {0, 0, 0, 0, 0, 0}; /* feature level on the rendered surface */
     double worst_run_tx = 0.0;
-    unsigned long lost = 0, lost_sim = 0, frames = 0;
+    unsigned long lost = 0, lost_sim = 0, lost_surf = 0, frames = 0;
     double us_per_frame_sum = 0.0;
     unsigned long feats = 0; /* features given to the estimator, all cameras, all frames */
 };
@@ -96,6 +99,28 @@ struct SimRef {
     rp_frameset_t fs;
 };
 
+/* The estimator of cfg on the frame sets next(j, fs) makes, frames 1.. scored against truth(j)
+ * into err and lost. Only the estimator is used (the pipeline's trackers are not). */
+template <class Next, class Truth>
+bool run_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rp_rig_t &rig, uint32_t frames,
+                   Next next, Truth truth, double err[NCOL], unsigned long *lost)
+{
+    const bool stereo = cfg.layout == RP_PIPE_STEREO4 || cfg.layout == RP_PIPE_STEREO2;
+    rp_status_t st = stereo ? rp_vo_stereo_init(&s->stereo, &rig, &cfg.stereo)
+                            : rp_vo_gc_init(&s->gc, &rig, &cfg.gc);
+    for (uint32_t j = 0; st == RP_OK && j < frames; ++j) {
+        next(j, &s->fs);
+        rp_estimate_t est;
+        const rp_status_t sj = stereo ? rp_vo_stereo_step(&s->stereo, &s->fs, &est)
+                                      : rp_vo_gc_step(&s->gc, &s->fs, &est);
+        if (j > 0) {
+            *lost += sj != RP_OK;
+            add_err(est.p, truth(j), err);
+        }
+    }
+    return st == RP_OK;
+}
+
 bool sim_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rp_rig_t &rig, uint64_t seed,
                    uint32_t run, uint32_t frames, Method *m)
 {
@@ -109,21 +134,27 @@ bool sim_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rp_rig_t &rig, uin
     if (rp_sim_run_init(&sr, &sc, seed, run) != 0) {
         return false;
     }
-    const bool stereo = cfg.layout == RP_PIPE_STEREO4 || cfg.layout == RP_PIPE_STEREO2;
-    rp_status_t st = stereo ? rp_vo_stereo_init(&s->stereo, &sr.rig, &cfg.stereo)
-                            : rp_vo_gc_init(&s->gc, &sr.rig, &cfg.gc);
-    for (uint32_t j = 0; st == RP_OK && j < frames; ++j) {
-        (void)rp_sim_frame(&sr, j, &s->fs);
-        rp_estimate_t est;
-        const rp_status_t sj = stereo ? rp_vo_stereo_step(&s->stereo, &s->fs, &est)
-                                      : rp_vo_gc_step(&s->gc, &s->fs, &est);
-        if (j > 0) {
-            m->lost_sim += sj != RP_OK;
-            add_err(est.p, &sr.truth[6u * j], m->err_sim);
-        }
-    }
+    const bool ok = run_reference(
+        s, cfg, sr.rig, frames, [&](uint32_t j, rp_frameset_t *fs) { rp_sim_frame(&sr, j, fs); },
+        [&](uint32_t j) { return &sr.truth[6u * j]; }, m->err_sim, &m->lost_sim);
     rp_sim_run_free(&sr);
-    return st == RP_OK;
+    return ok;
+}
+
+/* The same feature model with 10,000 points on the rendered surface of seq (0.5 px noise). */
+bool surface_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rpr::Sequence &seq,
+                       Method *m)
+{
+    const rpr::SeqCfg &c = seq.cfg();
+    const std::vector<double> pts =
+        rpr::surface_points(seq.scene(), 10000, rpr::key(c.seed, c.run, 0x5EF));
+    return run_reference(
+        s, cfg, seq.rig(), c.frames,
+        [&](uint32_t j, rp_frameset_t *fs) {
+            rpr::surface_features(seq, pts, seq.rig().n_cams, j, 0.5,
+                                  rpr::key(c.seed, c.run, 0x5EF, 1), fs);
+        },
+        [&](uint32_t j) { return seq.truth(j); }, m->err_surf, &m->lost_surf);
 }
 
 void usage(FILE *out)
@@ -136,7 +167,8 @@ void usage(FILE *out)
                  "  --runs N         runs (default 5); run r renders rigpose-sim's run r\n"
                  "  --first-run R    first run index (default 0)\n"
                  "  --sigma-px S     the estimators' pixel sigma (default 0.5)\n"
-                 "  --no-sim-ref     skip the feature-level reference rows\n"
+                 "  --no-sim-ref     skip the feature-level reference rows (rp_sim's points and\n"
+                 "                   the same model on the rendered surface)\n"
                  "  --check M=TX,..  exit 1 if method M's mean tx error exceeds TX metres\n"
                  "  --json-out FILE  write {\"render_<method>_<col>_m|rad\": ...} to FILE\n"
                  "  --quiet          no per-run lines\n"
@@ -367,6 +399,10 @@ int main(int argc, char **argv)
                     return 1;
                 }
                 sim_tx = (methods[m].err_sim[0] - before) / (rc.frames - 1);
+                if (!surface_reference(ref, cfgs[m], seq, &methods[m])) {
+                    std::fprintf(stderr, "rigpose-e2e: surface reference failed\n");
+                    return 1;
+                }
             }
             if (!quiet) {
                 std::printf("  run %u %-8s pixels tx %.6f m", r, methods[m].name.c_str(), tx);
@@ -418,6 +454,14 @@ int main(int argc, char **argv)
             for (int c = 0; c < NCOL; ++c) {
                 std::printf("%10.2f", m.err[c] / m.err_sim[c]);
             }
+            std::printf("\n  %-26s", (m.name + " (surface feats)").c_str());
+            for (int c = 0; c < NCOL; ++c) {
+                std::printf("%10.6f", m.err_surf[c] / n);
+            }
+            std::printf("%8lu\n  %-26s", m.lost_surf, "pixels / surface feats");
+            for (int c = 0; c < NCOL; ++c) {
+                std::printf("%10.2f", m.err[c] / m.err_surf[c]);
+            }
             std::printf("\n");
         }
         std::printf("  %-26s%10.6f\n", "worst run (pixels), tx", m.worst_run_tx);
@@ -435,6 +479,8 @@ int main(int argc, char **argv)
             if (sim_ref) {
                 std::fprintf(js, ", \"render_%s_vs_sim_tx_ratio\": %.4g", m.name.c_str(),
                              m.err[0] / m.err_sim[0]);
+                std::fprintf(js, ", \"render_%s_vs_surface_tx_ratio\": %.4g", m.name.c_str(),
+                             m.err[0] / m.err_surf[0]);
             }
             std::fprintf(js, ", \"render_%s_lost_frames\": %lu", m.name.c_str(), m.lost);
         }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <random>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -487,6 +488,60 @@ void Sequence::render(uint32_t j, int k, cv::Mat *out8) const
     fx.noise_grey = cfg_.noise_grey;
     fx.noise_key = key(cfg_.seed, cfg_.run, j, (uint64_t)k + 1u);
     finish_image(alb, fx, out8);
+}
+
+std::vector<double> surface_points(const Scene &scene, int n, uint64_t seed_key)
+{
+    std::mt19937_64 rng(seed_key);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::vector<double> pts;
+    pts.reserve(3u * (size_t)(n > 0 ? n : 0));
+    for (int i = 0; i < n; ++i) {
+        double u[3] = {g(rng), g(rng), g(rng)}, M[3];
+        if (u[0] == 0.0 && u[1] == 0.0 && u[2] == 0.0) {
+            u[2] = 1.0;
+        }
+        scene.surface_point(u, M);
+        pts.insert(pts.end(), M, M + 3);
+    }
+    return pts;
+}
+
+void surface_features(const Sequence &seq, const std::vector<double> &pts, int n_cams,
+                      uint32_t j, double noise_px, uint64_t noise_key, rp_frameset_t *fs)
+{
+    const rp_rig_t &rig = seq.rig();
+    rp_real tp[6];
+    for (int c = 0; c < 6; ++c) {
+        tp[c] = (rp_real)seq.truth(j)[c];
+    }
+    rp_pose_lin_t pl;
+    std::memset(fs->n, 0, sizeof fs->n);
+    fs->utime = seq.utime(j);
+    if (rp_pose_lin_set(&pl, tp) != RP_OK) {
+        return;
+    }
+    for (int k = 0; k < n_cams && k < rig.n_cams; ++k) {
+        const rp_camera_t &cam = rig.cam[k].cam;
+        std::mt19937_64 rng(key(noise_key, j, (uint64_t)k));
+        std::normal_distribution<double> g(0.0, noise_px > 0.0 ? noise_px : 1.0);
+        const double amp = noise_px > 0.0 ? 1.0 : 0.0;
+        for (size_t i = 0; 3 * i + 2 < pts.size() && fs->n[k] < RP_MAX_FEATS_PER_CAM; ++i) {
+            const rp_real M[3] = {(rp_real)pts[3 * i], (rp_real)pts[3 * i + 1],
+                                  (rp_real)pts[3 * i + 2]};
+            rp_real P[3], uv[2];
+            if (rp_rig_cam_point(&rig, (uint8_t)k, &pl, M, P) != RP_OK || P[2] < (rp_real)0.05 ||
+                rp_rig_project(&rig, (uint8_t)k, &pl, M, uv, nullptr, nullptr) != RP_OK ||
+                !(uv[0] >= -0.5 && uv[0] < cam.width - 0.5 && uv[1] >= -0.5 &&
+                  uv[1] < cam.height - 0.5)) {
+                continue;
+            }
+            rp_feat_t &f = fs->f[k][fs->n[k]++];
+            f.id = (uint32_t)i;
+            f.uv[0] = uv[0] + (rp_real)(amp * g(rng));
+            f.uv[1] = uv[1] + (rp_real)(amp * g(rng));
+        }
+    }
 }
 
 } /* namespace rpr */

@@ -175,6 +175,18 @@ private:
     std::vector<CamRays> rays_;
 };
 
+/* The feature-level simulation's model on the rendered surface (a reference for runs from
+ * pixels with the scene's own depths): n points on the surface in directions uniform over the
+ * sphere (seeded by seed_key); world metres, 3 per point. */
+std::vector<double> surface_points(const Scene &scene, int n, uint64_t seed_key);
+
+/* Frame set of frame j of seq from points pts, as rp_sim_frame makes it: in each of the first
+ * n_cams rig cameras every point at least 0.05 m in front that projects inside the image
+ * (the first RP_MAX_FEATS_PER_CAM of them), id = point index, plus independent Gaussian noise
+ * of noise_px per coordinate (seeded by noise_key, j and the camera). */
+void surface_features(const Sequence &seq, const std::vector<double> &pts, int n_cams,
+                      uint32_t j, double noise_px, uint64_t noise_key, rp_frameset_t *fs);
+
 } /* namespace rpr */
 
 #endif /* RP_RENDER_HPP */
