@@ -17,8 +17,8 @@
  * tests/test_track.c); interpolation and gradients run column group by column group with the rows
  * rolling in registers, straight from the pyramid away from the border. After the first 2 tracks
  * of a frame, a track starts from the displacement of the nearest track that passed before it
- * (its bucketing cell and the 8 around it) on the finest level only, and falls back to all levels
- * from zero motion if that fails; the backward check starts at the original position on the finest
+ * (its bucketing cell and the 8 around it) on the finest level only, and runs over all levels
+ * from zero motion if there is none or that fails; the backward check starts at the original position on the finest
  * level and carries the residual test. Coarse levels stop at 16x the convergence step; detection
  * streams rows (no full-frame response map) and, on top-up, searches only the cells that lack
  * features.
