@@ -441,7 +441,11 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
     if ((sl != RP_OK && sl != RP_E_NO_CONVERGE) || !rp_all_finite(p, 6)) {
         return st;
     }
-    const uint16_t first_used = info->n_used;
+    /* keep the first update's result, to restore it if the retry is no better */
+    const rp_ekf_t first = vo->ekf;
+    const rp_ekf_info_t first_info = *info;
+    uint8_t first_used[sizeof vo->used];
+    memcpy(first_used, vo->used, n);
     vo->ekf = vo->ekf_pred;
     for (int i = 0; i < 6; ++i) {
         d[i] = p[i] - vo->ekf_pred.x[i];
@@ -453,14 +457,15 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
     }
     rp_ekf_info_t retry;
     if (rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, &retry) == RP_OK &&
-        retry.n_used > first_used) {
+        retry.n_used > first_info.n_used) {
         vo->n_retried++;
         *info = retry;
         return RP_OK;
     }
-    /* the first update stands: redo it for its `used` marks */
-    vo->ekf = vo->ekf_pred;
-    return rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, info);
+    vo->ekf = first;
+    memcpy(vo->used, first_used, n);
+    *info = first_info;
+    return st;
 }
 
 rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
