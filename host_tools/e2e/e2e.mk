@@ -5,6 +5,7 @@
 #   make $(REL)/rigpose-e2e     the program
 #   make test                   runs host_tools/e2e/test_e2e.sh (a short run, loose bounds)
 #   make bench                  $(BUILD)/bench/render.json (render_stereo4_tx_m, render_gc_tx_m)
+#                               and render_points.json (the same on the points scene)
 
 E2E_BIN := $(REL)/rigpose-e2e
 E2E_RENDER_LIB := $(BUILD)/render/librp_render.a
@@ -28,3 +29,10 @@ BENCH_PARTS += $(BUILD)/bench/render.json
 $(BUILD)/bench/render.json: $(E2E_BIN) FORCE
 	@mkdir -p $(BUILD)/bench
 	$(E2E_BIN) --methods stereo4,gc --runs $(E2E_BENCH_RUNS) --frames 100 --ss 1 --json-out $@
+
+# The same on the points scene (rp_sim's own points as discs): render_points_<method>_..._m.
+BENCH_PARTS += $(BUILD)/bench/render_points.json
+$(BUILD)/bench/render_points.json: $(E2E_BIN) FORCE
+	@mkdir -p $(BUILD)/bench
+	$(E2E_BIN) --methods stereo4,gc --runs $(E2E_BENCH_RUNS) --frames 100 --ss 1 --points \
+	    --json-out $@

@@ -1,6 +1,7 @@
 /*
  * rigpose-e2e - rigpose from pixels: rendered frame sets (rp_render.hpp: the paper's rig and
- * motion through the textured shell) -> the core's image pipeline (rp_pipe.h: trackers, stereo
+ * motion through the textured shell, or with --points rp_sim's own points as textured discs)
+ * -> the core's image pipeline (rp_pipe.h: trackers, stereo
  * matching, the layout's estimator) -> poses, scored as rigpose-sim scores them: for every frame
  * j >= 1 (frame 0 defines the world) the absolute error of each pose column, |t_est - t_true|
  * for tx ty tz and |wrap(angle_est - angle_true)| for alpha beta gamma; the table shows the means
@@ -10,7 +11,9 @@
  * estimator configuration fed rigpose-sim's simulated features (rp_sim_frame: 10,000 shell
  * points, 0.5 px noise) along the same trajectories, and the ratio pixel / feature; and the
  * same feature model with the 10,000 points on the rendered surface (rpr::surface_features):
- * the scene's own depths, which set gc's metric scale (host_tools/gcdiag/README.md).
+ * the scene's own depths, which set gc's metric scale (host_tools/gcdiag/README.md). With
+ * --points the scene is the feature-level simulation's own (its depths too), so the surface row
+ * would repeat the sim row and is left out.
  *
  * Run r of `--runs N` is run r of the experiment `--seed` (the motion of rigpose-sim's run r);
  * every method sees the same rendered images.
@@ -171,6 +174,7 @@ void usage(FILE *out)
                  "                   the same model on the rendered surface)\n"
                  "  --check M=TX,..  exit 1 if method M's mean tx error exceeds TX metres\n"
                  "  --json-out FILE  write {\"render_<method>_<col>_m|rad\": ...} to FILE\n"
+                 "                   (render_points_... with --points)\n"
                  "  --quiet          no per-run lines\n"
                  "  --verbose        one line per frame set and method (status, features, errors)\n");
     rpr::cli_usage(out);
@@ -377,6 +381,16 @@ int main(int argc, char **argv)
                                 (double)est.p[1] - seq.truth(j)[1],
                                 (double)est.p[2] - seq.truth(j)[2],
                                 (double)est.p[5] - seq.truth(j)[5]);
+                    for (int q = 0; inf && q < RP_MAX_PAIRS; ++q) {
+                        const rp_smatch_stats_t &ms = inf->match[q];
+                        if (ms.n_in) {
+                            std::printf("    pair %d: in %u matched %u outside %u flat %u low %u "
+                                        "ambiguous %u lr %u epipolar %u\n",
+                                        q, ms.n_in, ms.n_matched, ms.n_outside, ms.n_flat,
+                                        ms.n_low_score, ms.n_ambiguous, ms.n_lr_fail,
+                                        ms.n_epi_fail);
+                        }
+                    }
                 }
                 if (j == 0) {
                     continue;
@@ -399,7 +413,7 @@ int main(int argc, char **argv)
                     return 1;
                 }
                 sim_tx = (methods[m].err_sim[0] - before) / (rc.frames - 1);
-                if (!surface_reference(ref, cfgs[m], seq, &methods[m])) {
+                if (!seq.points() && !surface_reference(ref, cfgs[m], seq, &methods[m])) {
                     std::fprintf(stderr, "rigpose-e2e: surface reference failed\n");
                     return 1;
                 }
@@ -417,12 +431,14 @@ int main(int argc, char **argv)
 
     const double fx = sc.focal_px > 0.0 ? sc.focal_px : 800.0 * sc.width / 640.0;
     std::printf("\nrigpose-e2e: from rendered pixels, %u run%s x %u frames (runs %u..%u of seed "
-                "%llu)\n  6 cameras %dx%d, fx = fy = %.1f px, principal point at the centre; "
+                "%llu), scene %s\n  6 cameras %dx%d, fx = fy = %.1f px, principal point at the centre; "
                 "image noise %.2g grey levels, blur %.2g px, brightness %.2g, %dx%d samples/px\n"
                 "  mean absolute error per frame over frames 1..%u (frame 0 defines the world); "
                 "m and rad\n\n  %-26s",
                 runs, runs == 1 ? "" : "s", sc.frames, first_run, first_run + runs - 1,
-                (unsigned long long)sc.seed, sc.width, sc.height, fx, sc.noise_grey,
+                (unsigned long long)sc.seed,
+                sc.points ? "points (rp_sim's points as discs)" : (sc.flat ? "sphere" : "shell"),
+                sc.width, sc.height, fx, sc.noise_grey,
                 sc.blur_sigma, sc.brightness, sc.ss, sc.ss, sc.frames - 1, "");
     for (const char *cn : col_name) {
         std::printf("%10s", cn);
@@ -430,12 +446,13 @@ int main(int argc, char **argv)
     std::printf("%8s%10s%10s\n", "lost", "feats/fs", "us/fs");
     bool checks_ok = true;
     FILE *js = json_out.empty() ? nullptr : std::fopen(json_out.c_str(), "w");
+    const char *jp = sc.points ? "render_points_" : "render_"; /* JSON key prefix */
     if (!json_out.empty() && !js) {
         std::fprintf(stderr, "rigpose-e2e: cannot write %s\n", json_out.c_str());
         return 1;
     }
     if (js) {
-        std::fprintf(js, "{\"render_runs\": %u, \"render_frames\": %u", runs, sc.frames);
+        std::fprintf(js, "{\"%sruns\": %u, \"%sframes\": %u", jp, runs, jp, sc.frames);
     }
     for (Method &m : methods) {
         const double n = (double)m.frames;
@@ -454,13 +471,15 @@ int main(int argc, char **argv)
             for (int c = 0; c < NCOL; ++c) {
                 std::printf("%10.2f", m.err[c] / m.err_sim[c]);
             }
-            std::printf("\n  %-26s", (m.name + " (surface feats)").c_str());
-            for (int c = 0; c < NCOL; ++c) {
-                std::printf("%10.6f", m.err_surf[c] / n);
-            }
-            std::printf("%8lu\n  %-26s", m.lost_surf, "pixels / surface feats");
-            for (int c = 0; c < NCOL; ++c) {
-                std::printf("%10.2f", m.err[c] / m.err_surf[c]);
+            if (!sc.points) { /* the points scene's surface row would be the sim row */
+                std::printf("\n  %-26s", (m.name + " (surface feats)").c_str());
+                for (int c = 0; c < NCOL; ++c) {
+                    std::printf("%10.6f", m.err_surf[c] / n);
+                }
+                std::printf("%8lu\n  %-26s", m.lost_surf, "pixels / surface feats");
+                for (int c = 0; c < NCOL; ++c) {
+                    std::printf("%10.2f", m.err[c] / m.err_surf[c]);
+                }
             }
             std::printf("\n");
         }
@@ -473,16 +492,18 @@ int main(int argc, char **argv)
         }
         if (js) {
             for (int c = 0; c < NCOL; ++c) {
-                std::fprintf(js, ", \"render_%s_%s_%s\": %.6g", m.name.c_str(), col_name[c],
+                std::fprintf(js, ", \"%s%s_%s_%s\": %.6g", jp, m.name.c_str(), col_name[c],
                              c < 3 ? "m" : "rad", m.err[c] / n);
             }
             if (sim_ref) {
-                std::fprintf(js, ", \"render_%s_vs_sim_tx_ratio\": %.4g", m.name.c_str(),
+                std::fprintf(js, ", \"%s%s_vs_sim_tx_ratio\": %.4g", jp, m.name.c_str(),
                              m.err[0] / m.err_sim[0]);
-                std::fprintf(js, ", \"render_%s_vs_surface_tx_ratio\": %.4g", m.name.c_str(),
-                             m.err[0] / m.err_surf[0]);
+                if (!sc.points) {
+                    std::fprintf(js, ", \"render_%s_vs_surface_tx_ratio\": %.4g",
+                                 m.name.c_str(), m.err[0] / m.err_surf[0]);
+                }
             }
-            std::fprintf(js, ", \"render_%s_lost_frames\": %lu", m.name.c_str(), m.lost);
+            std::fprintf(js, ", \"%s%s_lost_frames\": %lu", jp, m.name.c_str(), m.lost);
         }
     }
     std::printf("\n  rendering: %.1f s per frame set (6 cameras)\n",

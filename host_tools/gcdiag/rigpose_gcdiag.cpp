@@ -491,6 +491,11 @@ int main(int argc, char **argv)
             i += used - 1;
         }
     }
+    if (sc.points) {
+        std::fprintf(stderr, "rigpose-gcdiag: the shell scene only (--points has no surface; "
+                             "there rigpose-sim's figures are the reference)\n");
+        return 2;
+    }
 
     if (sim_keep > 0.0) {
         sim_mode(sc.seed, first_run, runs, sc.frames, sim_keep, min_tracked);

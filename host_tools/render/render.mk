@@ -15,11 +15,11 @@ RENDER_CXXFLAGS = -std=c++14 -O2 -g -DNDEBUG -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EI
     $(patsubst -I%,-isystem %,$(shell pkg-config --cflags opencv4)) $(INC) -Ihost_tools/render
 RENDER_LIBS = -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -lpthread -lm
 
-$(RENDER_DIR)/rp_render.o: host_tools/render/rp_render.cpp $(RENDER_HDR) | deps
+$(RENDER_DIR)/%.o: host_tools/render/%.cpp $(RENDER_HDR) | deps
 	mkdir -p $(RENDER_DIR)
 	$(CXX) $(RENDER_CXXFLAGS) -c $< -o $@
 
-$(RENDER_LIB): $(RENDER_DIR)/rp_render.o
+$(RENDER_LIB): $(RENDER_DIR)/rp_render.o $(RENDER_DIR)/rp_discs.o
 	rm -f $@ && ar rcs $@ $^
 
 $(RENDER_BIN): host_tools/render/rigpose_render.cpp $(RENDER_LIB) $(REL)/librigpose_sim.a \

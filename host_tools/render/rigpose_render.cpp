@@ -60,7 +60,7 @@ static bool write_rig_yaml(const std::string &path, const rpr::Sequence &seq)
                  "source:\n  kind: replay\n  replay_index: frames.csv\n  realtime: false\n\n"
                  "cameras:\n",
                  (unsigned long long)c.seed, c.run, c.frames, c.noise_grey, c.blur_sigma,
-                 c.brightness, c.flat ? "sphere" : "shell");
+                 c.brightness, c.points ? "points" : (c.flat ? "sphere" : "shell"));
     for (int k = 0; k < rig.n_cams && k < 6; ++k) {
         const rp_rig_cam_t &rc = rig.cam[k];
         std::fprintf(f,

@@ -31,6 +31,7 @@
 #include "rigpose/rp_rig.h"
 #include "rigpose/rp_track.h"
 #include "../common/rp_cv.hpp"
+#include "rp_noise.hpp"
 
 namespace rpr {
 
@@ -89,6 +90,53 @@ private:
     CubeMap radius_, albedo_;
 };
 
+/* Scene "points": the feature-level simulation's own point cloud made visible. Each point (the
+ * run's 10,000 points of rp_sim_run_init, at the same places) carries a flat disc of radius
+ * radius_m facing the world origin (the rig's start, so every camera sees it nearly face-on):
+ * a grey body level away from the background plus gradient noise in the disc's plane (two
+ * octaves, wavelengths kWave0 and kWave0 / 2; each disc its own patch of the noise field), the
+ * corners a tracker finds; opaque to 0.7 radii and fading smoothly to transparent at the rim. Rendering paints
+ * the discs of a camera back to front (centre depth) with alpha over a uniform background; a
+ * sub-pixel's value is the disc's albedo where its ray crosses the disc's plane (exact, no
+ * texture maps). A tracked corner is a physical point within radius_m of one of rp_sim's
+ * points, so the scene's depths per view are the simulation's. */
+struct DiscCfg {
+    double radius_m = 0.012;  /* 11.5 px at the shell's mid radius with fx = 800 */
+    float background = 0.5f;  /* albedo where no disc is hit */
+    uint64_t seed = 1;        /* body levels and spots */
+};
+
+struct CamRays;
+
+class DiscScene {
+public:
+    static constexpr int kOctaves = 2;
+    static constexpr double kWave0 = 0.67; /* first wavelength, disc radii */
+    static constexpr double kAmp0 = 0.45;   /* albedo amplitude of the first octave */
+    /* centres: n x 3 world metres. */
+    DiscScene(const std::vector<double> &centres, const DiscCfg &cfg);
+    size_t size() const { return discs_.size(); }
+    const double *centre(size_t i) const;
+    const DiscCfg &cfg() const { return cfg_; }
+    /* Disc i's normal (towards the world origin) and in-plane axes, world, unit. */
+    void axes(size_t i, double n[3], double e1[3], double e2[3]) const;
+    /* Albedo (0..1) and opacity (0..1) of disc i at (a, b) metres from its centre in its plane. */
+    void look(size_t i, double a, double b, float *albedo, float *alpha) const;
+    /* As render_albedo: the albedo image of rig camera k at pose (d, R). */
+    void render(const rp_rig_t &rig, int k, const double d[3], const double R[9],
+                const CamRays &rays, cv::Mat *out) const;
+
+private:
+    struct Disc {
+        double c[3], n[3], e1[3], e2[3]; /* centre, normal, in-plane axes (world) */
+        float level;
+        float off[3];                    /* the disc's offset in the noise field */
+    };
+    DiscCfg cfg_;
+    GradNoise noise_;
+    std::vector<Disc> discs_;
+};
+
 /* Per-camera rays: for each pixel (row-major) ss x ss sub-pixel rays in the camera frame
  * (unit vectors, float), from rp_cam_unproject. Sub-pixel (a, b) of pixel (u, v) sits at
  * (u - 0.5 + (a + 0.5) / ss, v - 0.5 + (b + 0.5) / ss). */
@@ -133,7 +181,8 @@ uint64_t key(uint64_t a, uint64_t b, uint64_t c = 0, uint64_t d = 0);
 
 /* A rendered run of the paper's protocol: the six-camera rig of rp_sim_make_rig (with the given
  * intrinsics and distortion), the trajectory of run `run` of the experiment seeded by `seed`
- * (rp_sim_run_init: the same motion as rigpose-sim's run), a shell scene seeded by (seed, run). */
+ * (rp_sim_run_init: the same motion as rigpose-sim's run), a shell scene seeded by (seed, run),
+ * or (points) that run's own point cloud as discs. */
 struct SeqCfg {
     int width = 640, height = 480;
     double focal_px = 0.0;       /* 0: 800 x width / 640 (the protocol's 800 px at 640x480) */
@@ -146,6 +195,8 @@ struct SeqCfg {
     double blur_sigma = 0.0;     /* px */
     double brightness = 0.0;     /* gain amplitude: gain_j,k = 1 + b sin(2 pi j / 40 + k) */
     bool flat = false;           /* sphere of radius r_mid instead of the bumpy shell */
+    bool points = false;         /* the "points" scene (DiscScene) instead of the shell */
+    double disc_radius = 0.012;  /* m, points scene */
     int face_px = 1024;
 };
 
@@ -157,7 +208,11 @@ public:
     const std::string &why() const { return why_; }
     const SeqCfg &cfg() const { return cfg_; }
     const rp_rig_t &rig() const { return rig_; }
+    /* The shell scene; only when !points() (the points scene has no surface). */
     const Scene &scene() const { return *scene_; }
+    bool points() const { return discs_ != nullptr; }
+    /* The points scene's disc centres (= rp_sim's points of this run), n x 3; empty for the shell. */
+    const std::vector<double> &point_cloud() const { return cloud_; }
     /* Truth of frame j: [tx ty tz alpha beta gamma] (as rp_estimate_t.p) and the pose. */
     const double *truth(uint32_t j) const { return &truth_[6u * j]; }
     Pose pose(uint32_t j) const;
@@ -172,6 +227,8 @@ private:
     std::vector<double> truth_, truth_R_;
     double frame_dt_ = 1.0 / 30.0;
     std::unique_ptr<Scene> scene_;
+    std::unique_ptr<DiscScene> discs_;
+    std::vector<double> cloud_;
     std::vector<CamRays> rays_;
 };
 

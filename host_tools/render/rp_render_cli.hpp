@@ -29,6 +29,8 @@ inline void cli_usage(FILE *out)
                  "  --blur S         Gaussian blur sigma, px (default 0)\n"
                  "  --brightness A   gain change 1 + A sin(2 pi j / 40 + k) (default 0)\n"
                  "  --flat           sphere of radius 0.8335 m instead of the bumpy shell\n"
+                 "  --points         rp_sim's own 10,000 points as textured discs instead of the shell\n"
+                 "  --disc-r M       disc radius of --points, m (default 0.012)\n"
                  "  --face-px N      texture cube map face side (default 1024)\n");
 }
 
@@ -41,10 +43,14 @@ inline int cli_parse(int argc, char **argv, int i, SeqCfg *cfg)
         cfg->flat = true;
         return 1;
     }
+    if (!std::strcmp(o, "--points")) {
+        cfg->points = true;
+        return 1;
+    }
     static const char *const with_value[] = {"--seed",  "--run",        "--frames", "--width",
                                              "--height", "--focal-px",  "--dist",   "--ss",
                                              "--noise-grey", "--blur",  "--brightness",
-                                             "--face-px"};
+                                             "--face-px", "--disc-r"};
     bool known = false;
     for (const char *w : with_value) {
         known = known || !std::strcmp(o, w);
@@ -100,6 +106,9 @@ inline int cli_parse(int argc, char **argv, int i, SeqCfg *cfg)
         } else if (!std::strcmp(o, "--brightness")) {
             bad = bad || x < 0 || x > 0.9;
             cfg->brightness = x;
+        } else if (!std::strcmp(o, "--disc-r")) {
+            bad = bad || !(x > 0 && x <= 0.05);
+            cfg->disc_radius = x;
         } else { /* --face-px */
             bad = bad || x < 64 || x > 8192 || x != std::floor(x);
             cfg->face_px = (int)x;

@@ -5,7 +5,10 @@
  *    with distortion) onto that pixel centre, in all six cameras;
  *  - image content: a Gaussian spot painted on the surface renders with its centroid where
  *    rp_rig_project puts its centre, in all six cameras, with and without distortion;
- *  - the scene's radii span the simulation's shell (0.667..1 m).
+ *  - the scene's radii span the simulation's shell (0.667..1 m);
+ *  - the points scene: its discs sit on rp_sim's points of the run, it renders the same bytes
+ *    for the same (seed, run), and a lone disc renders where rp_rig_project puts it: the pixel
+ *    values equal the disc's albedo at the point its ray crosses (look), background outside.
  * Prints the measured figures; ends with "[  PASSED  ] N test(s)." and exit 0 when all pass.
  */
 #include <algorithm>
@@ -17,6 +20,7 @@
 
 #include "rigpose/rp_rig.h"
 #include "rp_render.hpp"
+#include "rp_sim.h"
 
 static int n_pass = 0, n_fail = 0;
 
@@ -235,6 +239,105 @@ static void test_depths()
           "surface radii inside the simulation's shell, spanning it");
 }
 
+static void test_points_scene()
+{
+    rpr::SeqCfg c = small_cfg(5);
+    c.points = true;
+    c.run = 2;
+    rpr::Sequence a(c), b(c);
+    check(a.ok() && b.ok() && a.points(), "points sequences set up");
+    /* The disc centres are rp_sim's points of the same run. */
+    rp_sim_cfg_t sc;
+    rp_sim_default_cfg(&sc);
+    sc.width = 320;
+    sc.height = 240;
+    sc.focal_px = 400.0;
+    sc.n_frames = c.frames;
+    rp_sim_run_t sr;
+    bool same_pts = rp_sim_run_init(&sr, &sc, c.seed, c.run) == 0 &&
+                    a.point_cloud().size() == 3u * sc.n_points;
+    for (size_t i = 0; same_pts && i < 3u * sc.n_points; ++i) {
+        same_pts = a.point_cloud()[i] == sr.points[i];
+    }
+    rp_sim_run_free(&sr);
+    check(same_pts, "points scene: the discs sit on rp_sim's 10,000 points of the run");
+    bool same = true, textured = true;
+    for (int k = 0; k < 6; ++k) {
+        cv::Mat ia, ib;
+        a.render(1, k, &ia);
+        b.render(1, k, &ib);
+        same = same && cv::norm(ia, ib, cv::NORM_INF) == 0.0;
+        cv::Scalar mean, sd;
+        cv::meanStdDev(ia, mean, sd);
+        textured = textured && sd[0] > 15.0;
+    }
+    check(same && textured, "points scene: same (seed, run) renders the same bytes, textured");
+
+    /* One disc 0.8 m in front of camera 0 (rig at the origin), off the axis, with distortion. */
+    rp_rig_t rig = a.rig();
+    rp_camera_t &cam = rig.cam[0].cam;
+    cam.k1 = (rp_real)-0.2;
+    cam.k2 = (rp_real)0.05;
+    const double centre[3] = {0.12, -0.07, 0.8};
+    rpr::DiscCfg dc;
+    dc.seed = 3;
+    rpr::DiscScene one(std::vector<double>(centre, centre + 3), dc);
+    rpr::CamRays rays;
+    const bool rays_ok = rpr::make_rays(cam, 1, &rays);
+    const double d0[3] = {0, 0, 0}, I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    cv::Mat img;
+    one.render(rig, 0, d0, I, rays, &img);
+    /* Expected value of every pixel: alpha * albedo + (1 - alpha) * background, with look() at
+     * the point where the pixel's ray crosses the disc's plane; the background off the disc. */
+    const double *c0 = one.centre(0);
+    double n[3], e1[3], e2[3];
+    one.axes(0, n, e1, e2);
+    double worst = 0.0;
+    int on_disc = 0;
+    for (int v = 0; v < img.rows; ++v) {
+        for (int u = 0; u < img.cols; ++u) {
+            const float *r = &rays.ray[((size_t)v * img.cols + u) * 3u];
+            const double den = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+            const double t = (n[0] * c0[0] + n[1] * c0[1] + n[2] * c0[2]) / den;
+            const double h[3] = {t * r[0] - c0[0], t * r[1] - c0[1], t * r[2] - c0[2]};
+            const double da = h[0] * e1[0] + h[1] * e1[1] + h[2] * e1[2];
+            const double db = h[0] * e2[0] + h[1] * e2[1] + h[2] * e2[2];
+            double expect = dc.background;
+            if (da * da + db * db < dc.radius_m * dc.radius_m) {
+                float alb, alpha;
+                one.look(0, da, db, &alb, &alpha);
+                expect = alpha * alb + (1.0 - alpha) * dc.background;
+                ++on_disc;
+            }
+            worst = std::max(worst, std::fabs((double)img.at<float>(v, u) - expect));
+        }
+    }
+    /* The disc's footprint: pixels that differ from the background, their centroid against
+     * rp_rig_project of the centre. */
+    rp_real P[3] = {(rp_real)centre[0], (rp_real)centre[1], (rp_real)centre[2]}, uv[2];
+    const bool proj = rp_cam_project(&cam, P, uv, NULL) == RP_OK;
+    int changed = 0;
+    double su = 0.0, sv = 0.0;
+    for (int v = 0; v < img.rows; ++v) {
+        for (int u = 0; u < img.cols; ++u) {
+            if (img.at<float>(v, u) != dc.background) {
+                ++changed;
+                su += u;
+                sv += v;
+            }
+        }
+    }
+    const double cu = changed ? su / changed : -1e9, cv_ = changed ? sv / changed : -1e9;
+    std::printf("  lone disc: %d px inside its rim, %d px not background, worst |value - "
+                "expected| %.2g; footprint centre off the "
+                "projection by %.3f px (k1 -0.2)\n",
+                on_disc, changed, worst, std::hypot(cu - (double)uv[0], cv_ - (double)uv[1]));
+    check(rays_ok && proj && on_disc > 50 && changed > 0 && changed <= on_disc && worst < 1e-5 &&
+              std::hypot(cu - (double)uv[0], cv_ - (double)uv[1]) < 1.0,
+          "lone disc: every pixel is the disc's look() where its ray crosses it, background "
+          "elsewhere; footprint centred on the projection (< 1 px)");
+}
+
 int main()
 {
     test_determinism();
@@ -243,6 +346,7 @@ int main()
     test_marker(none, "pinhole");
     test_marker(barrel, "k1 -0.25 k2 0.08 p1 1e-3 p2 -5e-4");
     test_depths();
+    test_points_scene();
     if (n_fail == 0) {
         std::printf("[  PASSED  ] %d test(s).\n", n_pass);
         return 0;
