@@ -630,7 +630,13 @@ int main(int argc, char **argv)
     const bool rectified = is_kitti;
     std::vector<rprd::Pose> traj, dtraj;
     if (opencv_ref && rectified) {
-        if (opencv_reference(seq, &traj)) {
+        bool ok = false;
+        try {
+            ok = opencv_reference(seq, &traj);
+        } catch (const cv::Exception &e) {
+            std::printf("yardstick: OpenCV raised: %s\n", e.what());
+        }
+        if (ok) {
             ref = rprd::summarise(traj, seq.truth);
             std::printf("| yardstick: OpenCV frame-to-frame stereo PnP, ATE / path | %.3f %% "
                         "(%.4f m) |\n| yardstick: its RPE / path | %.3f %% |\n",

@@ -196,7 +196,17 @@ bool direct_reference(const Sequence &seq, const DirectOpts &o, std::vector<Pose
             *err = "direct yardstick: cannot read the images of frame " + std::to_string(j);
             return false;
         }
-        const Pose T = align(ref, checked_disparity(ref, right), next, k, (double)c1.D[0], o);
+        if (right.size() != ref.size() || next.size() != ref.size()) {
+            *err = "direct yardstick: image sizes differ at frame " + std::to_string(j);
+            return false;
+        }
+        Pose T;
+        try {
+            T = align(ref, checked_disparity(ref, right), next, k, (double)c1.D[0], o);
+        } catch (const cv::Exception &e) {
+            *err = "direct yardstick: OpenCV failed at frame " + std::to_string(j) + ": " + e.what();
+            return false;
+        }
         if (steps) {
             steps->push_back(T);
         }
