@@ -21,12 +21,14 @@
  * usage: rigpose-e2e [--methods LIST] [--runs N] [--first-run R] [--check M=TX,...]
  *                    [--json-out FILE] [render options, see --help]
  */
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -53,7 +55,60 @@ struct Method {
     unsigned long lost = 0, lost_sim = 0, lost_surf = 0, frames = 0;
     double us_per_frame_sum = 0.0;
     unsigned long feats = 0; /* features given to the estimator, all cameras, all frames */
+    /* --track-truth (points scene): each feature's world point, picked at its first frame, and
+     * the distance of later tracked positions from its true projection */
+    std::unordered_map<uint32_t, std::array<double, 5>> born[RP_MAX_CAMS]; /* X, picked?, frame */
+    double tt_age_sum[4] = {0, 0, 0, 0};
+    unsigned long tt_age_n[4] = {0, 0, 0, 0}, tt_age_3px[4] = {0, 0, 0, 0};
+    unsigned long tt_n = 0, tt_1px = 0, tt_3px = 0, tt_born = 0, tt_unpicked = 0;
+    double tt_sum = 0.0;
 };
+
+/* --track-truth: scores the features of frame set fs (frame j) against the points scene. */
+void track_truth(const rpr::Sequence &seq, uint32_t j, const rp_frameset_t &fs, Method *m)
+{
+    rp_real tp[6];
+    for (int c = 0; c < 6; ++c) {
+        tp[c] = (rp_real)seq.truth(j)[c];
+    }
+    rp_pose_lin_t pl;
+    if (rp_pose_lin_set(&pl, tp) != RP_OK) {
+        return;
+    }
+    for (int k = 0; k < RP_MAX_CAMS && k < seq.rig().n_cams; ++k) {
+        for (uint16_t i = 0; i < fs.n[k]; ++i) {
+            const rp_feat_t &f = fs.f[k][i];
+            auto it = m->born[k].find(f.id);
+            if (it == m->born[k].end()) {
+                std::array<double, 5> rec = {0, 0, 0, 0, (double)j};
+                rec[3] = seq.world_point_at(j, k, f.uv, rec.data()) ? 1.0 : 0.0;
+                m->born[k][f.id] = rec;
+                m->tt_born++;
+                m->tt_unpicked += rec[3] == 0.0;
+                continue;
+            }
+            if (it->second[3] == 0.0) {
+                continue;
+            }
+            const rp_real M[3] = {(rp_real)it->second[0], (rp_real)it->second[1],
+                                  (rp_real)it->second[2]};
+            rp_real uv[2];
+            if (rp_rig_project(&seq.rig(), (uint8_t)k, &pl, M, uv, nullptr, nullptr) != RP_OK) {
+                continue;
+            }
+            const double e = std::hypot((double)(f.uv[0] - uv[0]), (double)(f.uv[1] - uv[1]));
+            m->tt_n++;
+            m->tt_sum += e;
+            m->tt_1px += e > 1.0;
+            m->tt_3px += e > 3.0;
+            const double age = j - it->second[4];
+            const int b = age <= 1 ? 0 : (age <= 5 ? 1 : (age <= 20 ? 2 : 3));
+            m->tt_age_sum[b] += e;
+            m->tt_age_n[b]++;
+            m->tt_age_3px[b] += e > 3.0;
+        }
+    }
+}
 
 double wrap_angle(double x)
 {
@@ -176,7 +231,9 @@ void usage(FILE *out)
                  "  --json-out FILE  write {\"render_<method>_<col>_m|rad\": ...} to FILE\n"
                  "                   (render_points_... with --points)\n"
                  "  --quiet          no per-run lines\n"
-                 "  --verbose        one line per frame set and method (status, features, errors)\n");
+                 "  --verbose        one line per frame set and method (status, features, errors)\n"
+                 "  --track-truth    (with --points) tracked features against the true projection\n"
+                 "                   of the point each was born on: mean px, share over 1 and 3 px\n");
     rpr::cli_usage(out);
 }
 
@@ -249,7 +306,7 @@ int main(int argc, char **argv)
     std::string json_out;
     uint32_t runs = 5, first_run = 0;
     double sigma_px = 0.5;
-    bool sim_ref = true, quiet = false, verbose = false;
+    bool sim_ref = true, quiet = false, verbose = false, ttruth = false;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : nullptr;
@@ -260,6 +317,8 @@ int main(int argc, char **argv)
             sim_ref = false;
         } else if (!std::strcmp(a, "--verbose")) {
             verbose = true;
+        } else if (!std::strcmp(a, "--track-truth")) {
+            ttruth = true;
         } else if (!std::strcmp(a, "--quiet")) {
             quiet = true;
         } else if (!std::strcmp(a, "--methods") && v) {
@@ -305,6 +364,10 @@ int main(int argc, char **argv)
     if (checks && !parse_checks(checks, &methods)) {
         return 2;
     }
+    if (ttruth && !sc.points) {
+        std::fprintf(stderr, "rigpose-e2e: --track-truth needs --points\n");
+        return 2;
+    }
     if (sc.frames < 2) {
         std::fprintf(stderr, "rigpose-e2e: --frames must be >= 2 (frame 0 is not scored)\n");
         return 2;
@@ -344,6 +407,11 @@ int main(int argc, char **argv)
             }
         }
         std::vector<double> run_err(methods.size(), 0.0);
+        for (Method &mm : methods) {
+            for (auto &b : mm.born) {
+                b.clear();
+            }
+        }
         std::vector<cv::Mat> img(seq.rig().n_cams);
         for (uint32_t j = 0; j < rc.frames; ++j) {
             const auto t0 = std::chrono::steady_clock::now();
@@ -367,6 +435,9 @@ int main(int argc, char **argv)
                 if (rp_pipe_frameset(pipes[m], &fs) == RP_OK) {
                     for (int k = 0; k < RP_MAX_CAMS; ++k) {
                         methods[m].feats += fs->n[k];
+                    }
+                    if (ttruth) {
+                        track_truth(seq, j, *fs, &methods[m]);
                     }
                 }
                 if (verbose) {
@@ -484,6 +555,21 @@ int main(int argc, char **argv)
             std::printf("\n");
         }
         std::printf("  %-26s%10.6f\n", "worst run (pixels), tx", m.worst_run_tx);
+        if (ttruth && m.tt_n > 0) {
+            std::printf("  %-26s%10.3f px mean, %.1f %% over 1 px, %.1f %% over 3 px (%lu "
+                        "positions; %lu features born, %lu on no disc)\n",
+                        "tracks vs truth", m.tt_sum / m.tt_n, 100.0 * m.tt_1px / m.tt_n,
+                        100.0 * m.tt_3px / m.tt_n, m.tt_n, m.tt_born, m.tt_unpicked);
+            static const char *const age_name[4] = {"1", "2-5", "6-20", "> 20"};
+            for (int b = 0; b < 4; ++b) {
+                if (m.tt_age_n[b]) {
+                    std::printf("    %-24s%10.3f px mean, %.1f %% over 3 px (%lu)\n",
+                                (std::string("frames since birth ") + age_name[b]).c_str(),
+                                m.tt_age_sum[b] / m.tt_age_n[b],
+                                100.0 * m.tt_age_3px[b] / m.tt_age_n[b], m.tt_age_n[b]);
+                }
+            }
+        }
         if (m.check_tx > 0.0) {
             const bool ok = m.err[0] / n <= m.check_tx && std::isfinite(m.err[0]);
             std::printf("  check %s: mean tx %.6f m <= %.6f m: %s\n", m.name.c_str(), m.err[0] / n,

@@ -99,6 +99,42 @@ void DiscScene::look(size_t i, double a, double b, float *albedo, float *alpha) 
     *alpha = (float)(1.0 - smooth01((rho - 0.7) / 0.3));
 }
 
+bool DiscScene::pick(const double C[3], const double d[3], size_t *idx, double X[3]) const
+{
+    double best = 1e300;
+    bool hit = false;
+    for (size_t i = 0; i < discs_.size(); ++i) {
+        const Disc &D = discs_[i];
+        const double den = dot3(D.n, d);
+        if (std::fabs(den) < 1e-12) {
+            continue;
+        }
+        const double rel[3] = {D.c[0] - C[0], D.c[1] - C[1], D.c[2] - C[2]};
+        const double t = dot3(D.n, rel) / den;
+        if (!(t > 0.0) || t >= best) {
+            continue;
+        }
+        const double h[3] = {C[0] + t * d[0] - D.c[0], C[1] + t * d[1] - D.c[1],
+                             C[2] + t * d[2] - D.c[2]};
+        const double a = dot3(h, D.e1), b = dot3(h, D.e2);
+        if (a * a + b * b >= cfg_.radius_m * cfg_.radius_m) {
+            continue;
+        }
+        float alb, alpha;
+        look(i, a, b, &alb, &alpha);
+        if (alpha < 0.5f) {
+            continue;
+        }
+        best = t;
+        *idx = i;
+        for (int q = 0; q < 3; ++q) {
+            X[q] = C[q] + t * d[q];
+        }
+        hit = true;
+    }
+    return hit;
+}
+
 void DiscScene::render(const rp_rig_t &rig, int k, const double d[3], const double R[9],
                        const CamRays &rays, cv::Mat *out) const
 {

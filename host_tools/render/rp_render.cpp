@@ -431,6 +431,36 @@ void Sequence::render(uint32_t j, int k, cv::Mat *out8) const
     finish_image(alb, fx, out8);
 }
 
+bool Sequence::world_point_at(uint32_t j, int k, const rp_real uv[2], double X[3]) const
+{
+    if (!discs_ || j >= cfg_.frames || k < 0 || k >= rig_.n_cams) {
+        return false;
+    }
+    rp_real xn[2];
+    if (rp_cam_unproject(&rig_.cam[k].cam, uv, xn) != RP_OK) {
+        return false;
+    }
+    /* Camera k in the world: centre C = d + R D_k, ray M (xn, 1) with M = R R_k. */
+    const Pose p = pose(j);
+    const rp_rig_cam_t &rc = rig_.cam[k];
+    const double r[3] = {(double)xn[0], (double)xn[1], 1.0};
+    double C[3], dw[3];
+    for (int i = 0; i < 3; ++i) {
+        C[i] = p.d[i];
+        dw[i] = 0.0;
+        for (int l = 0; l < 3; ++l) {
+            C[i] += p.R[3 * i + l] * (double)rc.D[l];
+            double Ml = 0.0;
+            for (int c = 0; c < 3; ++c) {
+                Ml += (double)rc.R[3 * l + c] * r[c];
+            }
+            dw[i] += p.R[3 * i + l] * Ml;
+        }
+    }
+    size_t idx;
+    return discs_->pick(C, dw, &idx, X);
+}
+
 std::vector<double> surface_points(const Scene &scene, int n, uint64_t seed_key)
 {
     std::mt19937_64 rng(seed_key);

@@ -122,6 +122,10 @@ public:
     void axes(size_t i, double n[3], double e1[3], double e2[3]) const;
     /* Albedo (0..1) and opacity (0..1) of disc i at (a, b) metres from its centre in its plane. */
     void look(size_t i, double a, double b, float *albedo, float *alpha) const;
+    /* The nearest disc that ray C + t d (world, d need not be unit) crosses where it is at
+     * least half opaque: its index and the crossing point X (world). false if none. For ground
+     * truth of tracked features (a brute-force search over all discs). */
+    bool pick(const double C[3], const double d[3], size_t *idx, double X[3]) const;
     /* As render_albedo: the albedo image of rig camera k at pose (d, R). */
     void render(const rp_rig_t &rig, int k, const double d[3], const double R[9],
                 const CamRays &rays, cv::Mat *out) const;
@@ -213,6 +217,11 @@ public:
     bool points() const { return discs_ != nullptr; }
     /* The points scene's disc centres (= rp_sim's points of this run), n x 3; empty for the shell. */
     const std::vector<double> &point_cloud() const { return cloud_; }
+    /* The points scene (only when points()). */
+    const DiscScene &discs() const { return *discs_; }
+    /* The world point seen at pixel uv of rig camera k at frame j (points scene: the nearest
+     * half-opaque disc on the pixel's ray). false if none or not the points scene. */
+    bool world_point_at(uint32_t j, int k, const rp_real uv[2], double X[3]) const;
     /* Truth of frame j: [tx ty tz alpha beta gamma] (as rp_estimate_t.p) and the pose. */
     const double *truth(uint32_t j) const { return &truth_[6u * j]; }
     Pose pose(uint32_t j) const;
