@@ -55,7 +55,7 @@ struct Method {
     unsigned long lost = 0, lost_sim = 0, lost_surf = 0, frames = 0;
     double us_per_frame_sum = 0.0;
     unsigned long feats = 0; /* features given to the estimator, all cameras, all frames */
-    /* --track-truth (points scene): each feature's world point, picked at its first frame, and
+    /* --track-truth: each feature's world point, picked at its first frame, and
      * the distance of later tracked positions from its true projection */
     std::unordered_map<uint32_t, std::array<double, 5>> born[RP_MAX_CAMS]; /* X, picked?, frame */
     double tt_age_sum[4] = {0, 0, 0, 0};
@@ -64,7 +64,7 @@ struct Method {
     double tt_sum = 0.0;
 };
 
-/* --track-truth: scores the features of frame set fs (frame j) against the points scene. */
+/* --track-truth: scores the features of frame set fs (frame j) against the scene. */
 void track_truth(const rpr::Sequence &seq, uint32_t j, const rp_frameset_t &fs, Method *m)
 {
     rp_real tp[6];
@@ -232,8 +232,8 @@ void usage(FILE *out)
                  "                   (render_points_... with --points)\n"
                  "  --quiet          no per-run lines\n"
                  "  --verbose        one line per frame set and method (status, features, errors)\n"
-                 "  --track-truth    (with --points) tracked features against the true projection\n"
-                 "                   of the point each was born on: mean px, share over 1 and 3 px\n");
+                 "  --track-truth    tracked features against the true projection of the scene\n"
+                 "                   point each was born on: mean px, share over 1 and 3 px, by age\n");
     rpr::cli_usage(out);
 }
 
@@ -362,10 +362,6 @@ int main(int argc, char **argv)
         }
     }
     if (checks && !parse_checks(checks, &methods)) {
-        return 2;
-    }
-    if (ttruth && !sc.points) {
-        std::fprintf(stderr, "rigpose-e2e: --track-truth needs --points\n");
         return 2;
     }
     if (sc.frames < 2) {
@@ -557,7 +553,7 @@ int main(int argc, char **argv)
         std::printf("  %-26s%10.6f\n", "worst run (pixels), tx", m.worst_run_tx);
         if (ttruth && m.tt_n > 0) {
             std::printf("  %-26s%10.3f px mean, %.1f %% over 1 px, %.1f %% over 3 px (%lu "
-                        "positions; %lu features born, %lu on no disc)\n",
+                        "positions; %lu features born, %lu seeing nothing)\n",
                         "tracks vs truth", m.tt_sum / m.tt_n, 100.0 * m.tt_1px / m.tt_n,
                         100.0 * m.tt_3px / m.tt_n, m.tt_n, m.tt_born, m.tt_unpicked);
             static const char *const age_name[4] = {"1", "2-5", "6-20", "> 20"};

@@ -433,7 +433,7 @@ void Sequence::render(uint32_t j, int k, cv::Mat *out8) const
 
 bool Sequence::world_point_at(uint32_t j, int k, const rp_real uv[2], double X[3]) const
 {
-    if (!discs_ || j >= cfg_.frames || k < 0 || k >= rig_.n_cams) {
+    if (j >= cfg_.frames || k < 0 || k >= rig_.n_cams) {
         return false;
     }
     rp_real xn[2];
@@ -457,8 +457,20 @@ bool Sequence::world_point_at(uint32_t j, int k, const rp_real uv[2], double X[3
             dw[i] += p.R[3 * i + l] * Ml;
         }
     }
-    size_t idx;
-    return discs_->pick(C, dw, &idx, X);
+    if (discs_) {
+        size_t idx;
+        return discs_->pick(C, dw, &idx, X);
+    }
+    const double n = std::sqrt(dw[0] * dw[0] + dw[1] * dw[1] + dw[2] * dw[2]);
+    const double du[3] = {dw[0] / n, dw[1] / n, dw[2] / n};
+    double t, uh[3];
+    if (!scene_->intersect(C, du, &t, uh)) {
+        return false;
+    }
+    for (int i = 0; i < 3; ++i) {
+        X[i] = C[i] + t * du[i];
+    }
+    return true;
 }
 
 std::vector<double> surface_points(const Scene &scene, int n, uint64_t seed_key)

@@ -219,8 +219,8 @@ public:
     const std::vector<double> &point_cloud() const { return cloud_; }
     /* The points scene (only when points()). */
     const DiscScene &discs() const { return *discs_; }
-    /* The world point seen at pixel uv of rig camera k at frame j (points scene: the nearest
-     * half-opaque disc on the pixel's ray). false if none or not the points scene. */
+    /* The world point seen at pixel uv of rig camera k at frame j: where the pixel's ray meets
+     * the shell, or (points scene) the nearest half-opaque disc on it. false if none. */
     bool world_point_at(uint32_t j, int k, const rp_real uv[2], double X[3]) const;
     /* Truth of frame j: [tx ty tz alpha beta gamma] (as rp_estimate_t.p) and the pose. */
     const double *truth(uint32_t j) const { return &truth_[6u * j]; }
