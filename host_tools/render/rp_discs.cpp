@@ -138,19 +138,9 @@ bool DiscScene::pick(const double C[3], const double d[3], size_t *idx, double X
 void DiscScene::render(const rp_rig_t &rig, int k, const double d[3], const double R[9],
                        const CamRays &rays, cv::Mat *out) const
 {
-    /* Camera k in the world: centre C = d + R D_k, axes M = R R_k (columns). */
     const rp_rig_cam_t &rc = rig.cam[k];
     double C[3], M[9];
-    for (int i = 0; i < 3; ++i) {
-        C[i] = d[i];
-        for (int j = 0; j < 3; ++j) {
-            C[i] += R[3 * i + j] * (double)rc.D[j];
-            M[3 * i + j] = 0.0;
-            for (int l = 0; l < 3; ++l) {
-                M[3 * i + j] += R[3 * i + l] * (double)rc.R[3 * l + j];
-            }
-        }
-    }
+    cam_in_world(rig, k, d, R, C, M);
     /* World vector -> camera frame: M^T v. */
     auto to_cam = [&](const double v[3], double o[3]) {
         for (int j = 0; j < 3; ++j) {

@@ -268,12 +268,10 @@ bool make_rays(const rp_camera_t &cam, int ss, CamRays *out)
     return true;
 }
 
-void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double d[3],
-                   const double R[9], const CamRays &rays, cv::Mat *out)
+void cam_in_world(const rp_rig_t &rig, int k, const double d[3], const double R[9], double C[3],
+                  double M[9])
 {
-    /* Camera k in the world: centre C = d + R D_k, axes M = R R_k (columns). */
     const rp_rig_cam_t &rc = rig.cam[k];
-    double C[3], M[9];
     for (int i = 0; i < 3; ++i) {
         C[i] = d[i];
         for (int j = 0; j < 3; ++j) {
@@ -284,6 +282,13 @@ void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double 
             }
         }
     }
+}
+
+void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double d[3],
+                   const double R[9], const CamRays &rays, cv::Mat *out)
+{
+    double C[3], M[9];
+    cam_in_world(rig, k, d, R, C, M);
     out->create(rays.h, rays.w, CV_32F);
     const int per_px = rays.ss * rays.ss;
     const float inv = 1.0f / (float)per_px;
@@ -440,22 +445,12 @@ bool Sequence::world_point_at(uint32_t j, int k, const rp_real uv[2], double X[3
     if (rp_cam_unproject(&rig_.cam[k].cam, uv, xn) != RP_OK) {
         return false;
     }
-    /* Camera k in the world: centre C = d + R D_k, ray M (xn, 1) with M = R R_k. */
+    /* The pixel's ray in the world: from the camera's centre C along M (xn, 1). */
     const Pose p = pose(j);
-    const rp_rig_cam_t &rc = rig_.cam[k];
-    const double r[3] = {(double)xn[0], (double)xn[1], 1.0};
-    double C[3], dw[3];
+    double C[3], M[9], dw[3];
+    cam_in_world(rig_, k, p.d, p.R, C, M);
     for (int i = 0; i < 3; ++i) {
-        C[i] = p.d[i];
-        dw[i] = 0.0;
-        for (int l = 0; l < 3; ++l) {
-            C[i] += p.R[3 * i + l] * (double)rc.D[l];
-            double Ml = 0.0;
-            for (int c = 0; c < 3; ++c) {
-                Ml += (double)rc.R[3 * l + c] * r[c];
-            }
-            dw[i] += p.R[3 * i + l] * Ml;
-        }
+        dw[i] = M[3 * i] * (double)xn[0] + M[3 * i + 1] * (double)xn[1] + M[3 * i + 2];
     }
     if (discs_) {
         size_t idx;

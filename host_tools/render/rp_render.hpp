@@ -151,6 +151,11 @@ struct CamRays {
 };
 bool make_rays(const rp_camera_t &cam, int ss, CamRays *out);
 
+/* Rig camera k in the world at rig pose (d, R) (cam1 in the world; row-major): its centre
+ * C = d + R D_k and axes M = R R_k (columns; row-major). */
+void cam_in_world(const rp_rig_t &rig, int k, const double d[3], const double R[9], double C[3],
+                  double M[9]);
+
 /* Image of rig camera k at pose (d, R) (cam1 in the world; R row-major): a CV_32F image of
  * albedo values (0..1); pixels whose ray misses are 0. */
 void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double d[3],
