@@ -279,6 +279,63 @@ static void test_all_lost_redetects_new_ids(void **s)
     assert_true(info.n_tracked == 0 ? (info.flags & RP_TRACK_ALL_LOST) != 0 : 1);
 }
 
+/* Runs frame img0 then img1 (img0 with everything right of column keep_w replaced by another
+ * scene) through a tracker with reset_q8 = reset; returns the second frame's info. */
+static rp_track_info_t mass_loss_frame(uint8_t reset, int keep_w, uint16_t *n_before)
+{
+    texture_t t, o;
+    texture_make(&t);
+    texture_make(&o);
+    render(&t, 0, 0, img0);
+    render(&o, 0, 0, img1);
+    for (int v = 0; v < H; ++v) {
+        memcpy(img1 + v * W, img0 + v * W, (size_t)keep_w);
+    }
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    cfg.reset_q8 = reset;
+    assert_ok(rp_track_init(&trk, &cfg));
+    rp_image_t a = view(img0, W, H), b = view(img1, W, H);
+    uint16_t n1 = 0;
+    rp_track_info_t info;
+    assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, n_before, NULL));
+    assert_ok(rp_track_process(&trk, &b, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, &info));
+    return info;
+}
+
+/* Given a frame where most of the image became another scene (only a strip on the left kept its
+ * content), then by default the strip's surviving tracks are dropped too and reported
+ * (RP_TRACK_RESET, n_reset) and fresh features replace them; with reset_q8 = 0 the survivors are
+ * kept; and a frame where fewer than 80 % failed keeps its survivors. */
+static void test_reset_drops_survivors_of_mass_loss(void **s)
+{
+    (void)s;
+    uint16_t n0 = 0;
+    rp_track_info_t off = mass_loss_frame(0, W / 10, &n0);
+    print_message("strip of 1/10, reset off: %d of %d survived, flags 0x%x\n", off.n_tracked, n0,
+                  off.flags);
+    assert_true(off.n_tracked >= 5);
+    assert_false(off.flags & RP_TRACK_RESET);
+    assert_int_equal(off.n_reset, 0);
+
+    rp_track_cfg_t def;
+    assert_ok(rp_track_default_cfg(&def));
+    rp_track_info_t on = mass_loss_frame(def.reset_q8, W / 10, &n0);
+    print_message("strip of 1/10, reset on: %d survived, %d dropped by the reset, %d new, "
+                  "flags 0x%x\n", on.n_tracked, on.n_reset, on.n_new, on.flags);
+    assert_int_equal(on.n_tracked, 0);
+    assert_true(on.n_reset >= 5);
+    assert_true((on.flags & RP_TRACK_RESET) && (on.flags & RP_TRACK_ALL_LOST));
+    assert_true(on.n_new >= 100);
+    assert_int_equal(on.n_reset + on.n_lost + on.n_lost_fb, on.n_prev);
+
+    rp_track_info_t half = mass_loss_frame(def.reset_q8, W / 2, &n0);
+    print_message("strip of 1/2, reset on: %d of %d survived, flags 0x%x\n", half.n_tracked, n0,
+                  half.flags);
+    assert_true(half.n_tracked >= n0 / 4);
+    assert_false(half.flags & RP_TRACK_RESET);
+}
+
 /* Given a blank frame between two good ones, then it is reported and skipped, and tracking goes
  * on from the last good frame. */
 static void test_blank_frame_skipped(void **s)
@@ -555,6 +612,7 @@ int main(void)
         cmocka_unit_test(test_checkerboard_corners),
         cmocka_unit_test(test_fb_drops_occluded),
         cmocka_unit_test(test_all_lost_redetects_new_ids),
+        cmocka_unit_test(test_reset_drops_survivors_of_mass_loss),
         cmocka_unit_test(test_blank_frame_skipped),
         cmocka_unit_test(test_bad_images),
         cmocka_unit_test(test_no_texture_too_few),

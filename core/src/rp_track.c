@@ -363,6 +363,7 @@ rp_status_t rp_track_default_cfg(rp_track_cfg_t *cfg)
     cfg->cell_cap = 0;
     cfg->min_contrast = 8;
     cfg->max_err_q5 = 20 * 32;
+    cfg->reset_q8 = 205;
     return RP_OK;
 }
 
@@ -1213,6 +1214,7 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
         for (int c = 0; c < RP_TRACK_MAX_CELLS; ++c) {
             fs.last[c] = -1;
         }
+        uint32_t n_left = 0; /* tracked out of the image: not a failure */
         for (uint16_t i = 0; i < trk->n; ++i) {
             const int32_t p[2] = {trk->pos_q16[i][0], trk->pos_q16[i][1]};
             const int cell = cell_of(cfg, img->w, img->h, p[0] >> 16, p[1] >> 16);
@@ -1229,6 +1231,7 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
             if (r != TRACK_OK) {
                 inf.n_lost_fb = (uint16_t)(inf.n_lost_fb + (r == TRACK_LOST_FB));
                 inf.n_lost = (uint16_t)(inf.n_lost + (r != TRACK_LOST_FB));
+                n_left += r == TRACK_LEFT;
                 continue;
             }
             const uint16_t m = fs.n++;
@@ -1239,7 +1242,15 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
             trk->flow_q16[m][1] = f[1] - p[1];
             fs.last[cell] = (int16_t)m;
         }
-        const uint16_t m = fs.n;
+        uint16_t m = fs.n;
+        /* failed = lost or failing the backward check, of the tracks that stayed inside */
+        const uint32_t failed = (uint32_t)inf.n_lost_fb + inf.n_lost - n_left;
+        if (cfg->reset_q8 > 0 && m > 0 && inf.n_prev - n_left >= RP_TRACK_RESET_MIN &&
+            failed * 256u >= (uint32_t)cfg->reset_q8 * (inf.n_prev - n_left)) {
+            inf.n_reset = m;
+            inf.flags |= RP_TRACK_RESET;
+            m = 0;
+        }
         trk->n = m;
         if (m == 0 && inf.n_prev > 0) {
             inf.flags |= RP_TRACK_ALL_LOST;

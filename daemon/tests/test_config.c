@@ -95,6 +95,7 @@ static void test_base_file_is_valid(void **state)
     assert_string_equal(g_cfg.image_channel, "");
     assert_int_equal(g_cfg.status_every, 1);
     assert_int_equal(g_cfg.track.target, 150);
+    assert_int_equal(g_cfg.track.reset_q8, 205);
 }
 
 /* config/sim.yaml is the simulator's rig (rp_sim_make_rig) with stereo4 on its two pairs. */
@@ -132,6 +133,18 @@ static void test_embedded_default_is_the_simulated_rig(void **state)
     assert_int_equal(g_cfg.stereo.pair_b[1], RP_SIM_CAM3B);
     assert_int_equal(g_cfg.sim.drop_cam, -1);
     assert_near(g_cfg.sim.noise_px, 0.5, 1e-12);
+}
+
+/* tracker.reset_share sets the tracker's reset (0 turns it off). */
+static void test_tracker_reset_share(void **state)
+{
+    (void)state;
+    assert_int_equal(parse(edited(25, "  pose_channel: P\ntracker:\n  reset_share: 0.5")),
+                     RP_CFG_OK);
+    assert_int_equal(g_cfg.track.reset_q8, 128);
+    assert_int_equal(parse(edited(25, "  pose_channel: P\ntracker:\n  reset_share: 0")),
+                     RP_CFG_OK);
+    assert_int_equal(g_cfg.track.reset_q8, 0);
 }
 
 /* `angles` is the paper's R = Rz(gamma) Ry(beta) Rx(alpha). */
@@ -210,6 +223,8 @@ static const bad_case_t bad[] = {
      "bad.yaml:25: estimator.max_depth_m: must be larger"},
     {25, "  pose_channel: ''", RP_CFG_E_RANGE, "bad.yaml:25: lcm.pose_channel: must not be empty"},
     {25, "  status_every: 0", RP_CFG_E_RANGE, "bad.yaml:25: lcm.status_every: 0 is outside"},
+    {25, "  pose_channel: P\ntracker:\n  reset_share: 1.5", RP_CFG_E_RANGE,
+     "bad.yaml:27: tracker.reset_share: 1.5 is outside"},
     {3, "  kind: sim", RP_CFG_E_RANGE, "bad.yaml:6: cameras: the sim source simulates"},
     {3, "  kind: replay", RP_CFG_E_MISSING, "bad.yaml:3: source.replay_index: missing"},
     {4, "  timeout_ms: 500\n  timeout_ms: 600", RP_CFG_E_RANGE,
@@ -344,6 +359,7 @@ int main(void)
         cmocka_unit_test(test_base_file_is_valid),
         cmocka_unit_test(test_embedded_default_is_the_simulated_rig),
         cmocka_unit_test(test_angles_match_the_rotation_module),
+        cmocka_unit_test(test_tracker_reset_share),
         cmocka_unit_test(test_each_bad_file_names_line_and_key),
         cmocka_unit_test(test_whole_file_errors),
         cmocka_unit_test(test_replay_index_is_relative_to_the_file),

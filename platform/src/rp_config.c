@@ -791,7 +791,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 {
     static const char *const known[] = {"target", "levels", "win", "min_dist",
-                                        "fb_max_px", "grid", NULL};
+                                        "fb_max_px", "grid", "reset_share", NULL};
     const char *P = "tracker";
     rp_track_cfg_t *t = &cfg->track;
     (void)rp_track_default_cfg(t);
@@ -803,7 +803,7 @@ static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         return 0;
     }
     long long target, levels, win, mind;
-    double fb, grid[2] = {t->grid_x, t->grid_y};
+    double fb, reset, grid[2] = {t->grid_x, t->grid_y};
     int present;
     if (check_keys(c, m, P, known) ||
         get_int(c, m, P, "target", 0, t->target, 8, RP_MAX_FEATS_PER_CAM, &target) ||
@@ -811,7 +811,8 @@ static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         get_int(c, m, P, "win", 0, t->win, 5, RP_TRACK_MAX_WIN, &win) ||
         get_int(c, m, P, "min_dist", 0, t->min_dist, 1, 1000, &mind) ||
         get_num(c, m, P, "fb_max_px", 0, (double)t->fb_max_q16 / 65536.0, 0.0, 0, 100.0, &fb) ||
-        get_nums(c, m, P, "grid", 0, 2, grid, &present)) {
+        get_nums(c, m, P, "grid", 0, 2, grid, &present) ||
+        get_num(c, m, P, "reset_share", 0, t->reset_q8 / 256.0, 0.0, 0, 0.99, &reset)) {
         return -1;
     }
     if ((win & 1) == 0) {
@@ -830,6 +831,7 @@ static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     t->fb_max_q16 = (uint32_t)lround(fb * 65536.0);
     t->grid_x = (uint8_t)grid[0];
     t->grid_y = (uint8_t)grid[1];
+    t->reset_q8 = (uint8_t)lround(reset * 256.0);
     return 0;
 }
 

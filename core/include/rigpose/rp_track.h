@@ -65,14 +65,25 @@ typedef struct {
     uint8_t min_contrast; /* max - min grey level below this: a blank frame (skipped) */
     uint16_t max_err_q5; /* drop a track whose window still differs by more than this mean
                           * |J - I| after converging, grey levels Q5 (20 levels = 640); 0 = off */
+    uint8_t reset_q8;    /* when at least this share (Q8: 205 = 80 %) of a frame's tracks that
+                          * stayed inside the image failed, and at least RP_TRACK_RESET_MIN
+                          * stayed inside, drop the survivors too and detect afresh: the
+                          * image moved beyond the tracker's reach, and the few tracks that
+                          * "passed" mostly landed on a look-alike (rendered discs: 6 of 10 over
+                          * 3 px, 40 px mean). 0 = off */
 } rp_track_cfg_t;
+
+/* Tracks that stayed inside the image a frame needs before reset_q8 can drop its survivors. */
+#define RP_TRACK_RESET_MIN 20
 
 /* Events of one rp_track_process call, as flags. */
 enum {
     RP_TRACK_FIRST     = 1u << 0, /* no previous image: features detected only */
     RP_TRACK_TOPPED_UP = 1u << 1, /* new features detected this frame */
     RP_TRACK_ALL_LOST  = 1u << 2, /* every track from the previous frame was lost (re-detected) */
-    RP_TRACK_BLANK     = 1u << 3  /* blank frame: ignored, previous image and tracks kept */
+    RP_TRACK_BLANK     = 1u << 3, /* blank frame: ignored, previous image and tracks kept */
+    RP_TRACK_RESET     = 1u << 4  /* most tracks failed: the survivors were dropped too
+                                   * (cfg.reset_q8; with RP_TRACK_ALL_LOST) */
 };
 
 typedef struct {
@@ -81,6 +92,7 @@ typedef struct {
     uint16_t n_tracked; /* tracks that survived */
     uint16_t n_lost_fb; /* dropped by the forward-backward check */
     uint16_t n_lost;    /* dropped otherwise (left the image, low texture, LK out of bounds) */
+    uint16_t n_reset;   /* tracks that passed but were dropped by the reset (RP_TRACK_RESET) */
     uint16_t n_new;     /* new features */
 } rp_track_info_t;
 
