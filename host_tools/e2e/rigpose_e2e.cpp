@@ -233,7 +233,9 @@ void usage(FILE *out)
                  "  --quiet          no per-run lines\n"
                  "  --verbose        one line per frame set and method (status, features, errors)\n"
                  "  --track-truth    tracked features against the true projection of the scene\n"
-                 "                   point each was born on: mean px, share over 1 and 3 px, by age\n");
+                 "                   point each was born on: mean px, share over 1 and 3 px, by age\n"
+                 "  --check-track PX exit 1 if a method's tracks are off by more than PX px mean one\n"
+                 "                   frame after birth (implies --track-truth)\n");
     rpr::cli_usage(out);
 }
 
@@ -307,6 +309,7 @@ int main(int argc, char **argv)
     uint32_t runs = 5, first_run = 0;
     double sigma_px = 0.5;
     bool sim_ref = true, quiet = false, verbose = false, ttruth = false;
+    double check_track_px = -1.0; /* --check-track bound, px (< 0: none) */
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : nullptr;
@@ -319,6 +322,15 @@ int main(int argc, char **argv)
             verbose = true;
         } else if (!std::strcmp(a, "--track-truth")) {
             ttruth = true;
+        } else if (!std::strcmp(a, "--check-track") && v) {
+            char *end = nullptr;
+            check_track_px = std::strtod(v, &end);
+            if (*end || !(check_track_px > 0.0 && check_track_px < 1e3)) {
+                std::fprintf(stderr, "rigpose-e2e: bad value for --check-track: '%s'\n", v);
+                return 2;
+            }
+            ttruth = true;
+            ++i;
         } else if (!std::strcmp(a, "--quiet")) {
             quiet = true;
         } else if (!std::strcmp(a, "--methods") && v) {
@@ -565,6 +577,14 @@ int main(int argc, char **argv)
                                 100.0 * m.tt_age_3px[b] / m.tt_age_n[b], m.tt_age_n[b]);
                 }
             }
+        }
+        if (check_track_px > 0.0) {
+            /* tracking against the scene one frame after birth (--track-truth) */
+            const double e1 = m.tt_age_n[0] ? m.tt_age_sum[0] / m.tt_age_n[0] : 1e300;
+            const bool ok = e1 <= check_track_px;
+            std::printf("  check %s: tracks 1 frame after birth %.3f px <= %.3f px: %s\n",
+                        m.name.c_str(), e1, check_track_px, ok ? "ok" : "FAILED");
+            checks_ok = checks_ok && ok;
         }
         if (m.check_tx > 0.0) {
             const bool ok = m.err[0] / n <= m.check_tx && std::isfinite(m.err[0]);

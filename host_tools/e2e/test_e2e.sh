@@ -6,6 +6,8 @@
 #      rp_vo_stereo's widened retry it jumped by ~1 cm here);
 #   2. the points scene (rp_sim's own points as discs): gc 10 mm (measured 2.5 mm), stereo4
 #      1 mm (measured 0.092 mm).
+# and the tracks against the scene's truth one frame after birth (--check-track): shell 0.2 px
+# (measured 0.089 / 0.087 px for gc's / stereo4's cameras), points 1.0 px (0.476 / 0.406 px).
 # RP_E2E_BIN (exported by e2e.mk) is the program; default build/release/rigpose-e2e.
 set -u
 bin=${RP_E2E_BIN:-build/release/rigpose-e2e}
@@ -22,8 +24,10 @@ run() {
     fail=$((fail + 1))
   fi
 }
-run "shell scene: gc and stereo4 within their bounds" --face-px 512 --check gc=0.01,stereo4=0.0005
-run "points scene: gc and stereo4 within their bounds" --points --check gc=0.01,stereo4=0.001
+run "shell scene: gc and stereo4 within their bounds" --face-px 512 --check gc=0.01,stereo4=0.0005 \
+  --check-track 0.2
+run "points scene: gc and stereo4 within their bounds" --points --check gc=0.01,stereo4=0.001 \
+  --check-track 1.0
 if [ "$fail" -eq 0 ]; then
   echo "[  PASSED  ] $pass test(s)."
 else
