@@ -152,41 +152,21 @@ static inline v8_t v8_ld(const int16_t *p)
     return r;
 }
 static inline void v8_st(int16_t *p, v8_t a) { memcpy(p, a.e, sizeof(a.e)); }
-static inline v8_t v8_add(v8_t a, v8_t b)
-{
-    for (int i = 0; i < 8; ++i) {
-        a.e[i] = (int16_t)(a.e[i] + b.e[i]);
+/* Lane-wise a OP b, wrapping to int16 like the vector instructions. */
+#define RP_V8_BINOP(name, OP)                                                                  \
+    static inline v8_t name(v8_t a, v8_t b)                                                    \
+    {                                                                                          \
+        for (int i = 0; i < 8; ++i) {                                                          \
+            a.e[i] = (int16_t)(a.e[i] OP b.e[i]);                                              \
+        }                                                                                      \
+        return a;                                                                              \
     }
-    return a;
-}
-static inline v8_t v8_sub(v8_t a, v8_t b)
-{
-    for (int i = 0; i < 8; ++i) {
-        a.e[i] = (int16_t)(a.e[i] - b.e[i]);
-    }
-    return a;
-}
-static inline v8_t v8_mul(v8_t a, v8_t b)
-{
-    for (int i = 0; i < 8; ++i) {
-        a.e[i] = (int16_t)(a.e[i] * b.e[i]);
-    }
-    return a;
-}
-static inline v8_t v8_and(v8_t a, v8_t b)
-{
-    for (int i = 0; i < 8; ++i) {
-        a.e[i] = (int16_t)(a.e[i] & b.e[i]);
-    }
-    return a;
-}
-static inline v8_t v8_xor(v8_t a, v8_t b)
-{
-    for (int i = 0; i < 8; ++i) {
-        a.e[i] = (int16_t)(a.e[i] ^ b.e[i]);
-    }
-    return a;
-}
+RP_V8_BINOP(v8_add, +)
+RP_V8_BINOP(v8_sub, -)
+RP_V8_BINOP(v8_mul, *)
+RP_V8_BINOP(v8_and, &)
+RP_V8_BINOP(v8_xor, ^)
+#undef RP_V8_BINOP
 static inline v8_t v8_sra(v8_t a, int k)
 {
     for (int i = 0; i < 8; ++i) {
