@@ -55,6 +55,22 @@ deps:
 deps-cross:
 	@scripts/install-deps.sh cross
 
+# On a fresh machine the packages must be in place before any rule runs, also under -jN (a
+# prerequisite `deps` runs beside the others: lcm-gen, Eigen or cmocka would be missing). An
+# included makefile is brought up to date before make reads on and starts on the goals, so its
+# rule installs first; the stamps live in $(BUILD), so a clean clone or `make clean` installs
+# (that is, checks) again.
+ifneq ($(filter-out clean,$(or $(MAKECMDGOALS),all)),)
+include $(BUILD)/.deps/host.mk
+ifneq ($(filter cross test-arm,$(MAKECMDGOALS)),)
+include $(BUILD)/.deps/cross.mk
+endif
+endif
+$(BUILD)/.deps/host.mk: scripts/install-deps.sh
+	@scripts/install-deps.sh py && mkdir -p $(@D) && echo '# host packages installed' > $@
+$(BUILD)/.deps/cross.mk: scripts/install-deps.sh
+	@scripts/install-deps.sh cross && mkdir -p $(@D) && echo '# cross packages installed' > $@
+
 # Template: $(1) variant, $(2) object dir, $(3) cc, $(4) cxx, $(5) extra flags, $(6) ar
 define CORE_LIB
 $(2)/core/%.o: core/src/%.c $$(wildcard core/include/rigpose/*.h) | $(2)/core
