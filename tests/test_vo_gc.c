@@ -1,7 +1,8 @@
 /*
  * test_vo_gc.c - the generalised camera (gc) end to end on the paper's simulation, with the
  * four single cameras (front, right, back, left): accuracy against the paper's "2 cameras"
- * row, consistency of the pose covariance (3-sigma fraction, NEES), top-up of features, cameras
+ * row, consistency of the pose covariance (3-sigma fraction, NEES), the metric scale from the
+ * offsets when the assumed depth is wrong, top-up of features, cameras
  * going dark, malformed frame sets and bad configuration.
  */
 #include <string.h>
@@ -160,6 +161,41 @@ static void test_pose_covariance_is_consistent(void **state)
     assert_true(nees / scored < 20.0);
 }
 
+static void test_wrong_assumed_depth_is_corrected_by_the_offsets(void **state)
+{
+    (void)state;
+    /* New features assumed at 0.7 m in a shell of 0.667..1 m: the map starts about 15 %
+     * small. Without step 6 that error is the trajectory's scale for good; with it, the
+     * window adjustments find the map's unit from the rig's offsets. */
+    double err_on[6] = {0}, err_off[6] = {0}, mu = 0.0;
+    const int runs = 3;
+    for (int r = 0; r < runs; ++r) {
+        for (int on = 0; on < 2; ++on) {
+            fixture_t *fx = fixture(0.5, 100, (uint32_t)(20 + r));
+            rp_vo_gc_cfg_t cfg = gc_cfg(0.5);
+            cfg.init_depth_m = (rp_real)0.7;
+            if (!on) cfg.mscale_sigma = 0;
+            outcome_t o;
+            run_sequence(fx, &cfg, 100, NULL, &o);
+            assert_int_equal(o.lost, 0);
+            for (int i = 0; i < 6; ++i) (on ? err_on : err_off)[i] += o.err[i] / runs;
+            if (on) {
+                mu += (double)fx->vo.mu / runs;
+                assert_true(fx->vo.n_ba > 5);
+            } else {
+                assert_int_equal(fx->vo.n_ba, 0);
+                assert_near(fx->vo.mu, 1.0, 0.0);
+            }
+            simfx_free(fx);
+        }
+    }
+    simfx_print_err("gc, depth assumed 0.7 m, metric scale off", err_off);
+    simfx_print_err("gc, depth assumed 0.7 m, metric scale on ", err_on);
+    print_message("gc: map units per metre at the end, mean of %d runs: %.3f\n", runs, mu);
+    for (int i = 0; i < 3; ++i) assert_true(err_on[i] < 0.4 * err_off[i]);
+    assert_true(mu < 0.95);
+}
+
 static void test_top_up_adds_features_and_keeps_accuracy(void **state)
 {
     (void)state;
@@ -265,6 +301,26 @@ static void test_bad_configuration_is_refused(void **state)
     cfg = gc_cfg(0.5);
     cfg.ekf.sigma_px = -1;
     assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    /* the metric scale step's settings (checked while it is on) */
+    cfg = gc_cfg(0.5);
+    cfg.mscale_sigma = -1;
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = gc_cfg(0.5);
+    cfg.ba_kf = RP_GCBA_MAX_KF + 1;
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = gc_cfg(0.5);
+    cfg.ba_stride = 0;
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = gc_cfg(0.5);
+    cfg.ba_per_cam = 4;
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = gc_cfg(0.5);
+    cfg.ba_var_scale = (rp_real)0.5;
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = gc_cfg(0.5);
+    cfg.mscale_sigma = 0;
+    cfg.ba_stride = 0; /* step 6 off: its settings are not looked at */
+    assert_ok(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg));
     cfg = gc_cfg(0.5);
     assert_ok(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg));
     simfx_free(fx);
@@ -276,6 +332,7 @@ int main(void)
         cmocka_unit_test(test_noise_free_run_follows_truth),
         cmocka_unit_test(test_noisy_runs_beat_the_papers_stereo_pair),
         cmocka_unit_test(test_pose_covariance_is_consistent),
+        cmocka_unit_test(test_wrong_assumed_depth_is_corrected_by_the_offsets),
         cmocka_unit_test(test_top_up_adds_features_and_keeps_accuracy),
         cmocka_unit_test(test_one_camera_dark_keeps_tracking_with_the_others),
         cmocka_unit_test(test_all_cameras_dark_reports_lost_then_recovers),

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "priv/rp_math.h"
+#include "rigpose/rp_rot.h"
 #include "rigpose/rp_vo_gc.h"
 
 /* Prior standard deviations of the velocity when the filter starts (m/s, rad/s). */
@@ -23,8 +24,17 @@ rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void)
     c.default_dt_s = RP_C(1.0) / RP_C(30.0);
     c.max_eff_obs = RP_C(0.0);
     c.scale_sigma = RP_C(0.02);
-    c.trans_drift_sigma = RP_C(4e-5);
+    c.trans_drift_sigma = RP_C(6e-5);
     c.rot_drift_sigma = RP_C(1e-4);
+    c.mscale_sigma = RP_C(0.3);
+    c.mscale_q = RP_C(0.0);
+    c.ba_stride = 4;
+    c.ba_kf = 6;
+    c.ba_every = 2;
+    c.ba_per_cam = 80;
+    c.ba_var_scale = RP_C(3.0);
+    c.ba = rp_gcba_default_cfg();
+    c.ba.iterations = 2;
     return c;
 }
 
@@ -62,6 +72,18 @@ static void lm_drop_lost(rp_vo_gc_t *vo, const uint8_t had_image[RP_MAX_CAMS])
 
 /* ---- set-up ------------------------------------------------------------------------------ */
 
+/* The map's unit: mu map units per metre; the rig in map units has offsets D_k * mu. */
+static void set_mu(rp_vo_gc_t *vo, rp_real mu)
+{
+    vo->rig_m = *vo->rig;
+    vo->mu = mu;
+    for (uint8_t k = 0; k < vo->rig_m.n_cams; ++k) {
+        for (int a = 0; a < 3; ++a) {
+            vo->rig_m.cam[k].D[a] = mu * vo->rig->cam[k].D[a];
+        }
+    }
+}
+
 static void start_ekf(rp_vo_gc_t *vo)
 {
     rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
@@ -84,7 +106,17 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
     if (!rp_finite(cfg->max_eff_obs) || !rp_finite(cfg->scale_sigma) ||
         cfg->scale_sigma < RP_C(0.0) || !rp_finite(cfg->trans_drift_sigma) ||
         cfg->trans_drift_sigma < RP_C(0.0) || !rp_finite(cfg->rot_drift_sigma) ||
-        cfg->rot_drift_sigma < RP_C(0.0)) {
+        cfg->rot_drift_sigma < RP_C(0.0) || !rp_finite(cfg->mscale_sigma) ||
+        cfg->mscale_sigma < RP_C(0.0) || !rp_finite(cfg->mscale_q) ||
+        cfg->mscale_q < RP_C(0.0)) {
+        return RP_E_ARG;
+    }
+    if (cfg->mscale_sigma > RP_C(0.0) &&
+        (cfg->ba_stride < 1 || cfg->ba_kf < 3 || cfg->ba_kf > RP_GCBA_MAX_KF ||
+         cfg->ba_every < 1 || cfg->ba_per_cam < 8 ||
+         !(cfg->ba_var_scale >= RP_C(1.0)) || !rp_finite(cfg->ba_var_scale) ||
+         cfg->ba.iterations < 1 || cfg->ba.min_obs < 2 || !(cfg->ba.sigma_px > RP_C(0.0)) ||
+         !(cfg->ba.huber_px > RP_C(0.0)) || !(cfg->ba.min_angle >= RP_C(0.0)))) {
         return RP_E_ARG;
     }
     if (cfg->n_cams < 1 || cfg->n_cams > RP_MAX_CAMS || cfg->min_tracked < 6 ||
@@ -114,6 +146,7 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
     memset(vo, 0, sizeof(*vo));
     vo->rig = rig;
     vo->cfg = *cfg;
+    set_mu(vo, RP_C(1.0));
     vo->ekf = probe;
     (void)rp_idmap_clear(&vo->map);
     return RP_OK;
@@ -125,9 +158,10 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
  * covariance sigma_z^2 d d^T along the ray d = (xn, 1) plus an isotropic across-ray part from
  * the pixel noise and the pose uncertainty (Ppp, 6x6 row-major, may be NULL). */
 static rp_status_t init_feature(const rp_vo_gc_t *vo, uint8_t cam, const rp_real uv[2],
-                                const rp_pose_lin_t *pl, const rp_real *Ppp, rp_point3_t *pt)
+                                const rp_pose_lin_t *pl, const rp_real *Ppp, rp_real depth_m,
+                                rp_point3_t *pt)
 {
-    const rp_rig_cam_t *rc = &vo->rig->cam[cam];
+    const rp_rig_cam_t *rc = &vo->rig_m.cam[cam];
     rp_real xn[2];
     rp_status_t st = rp_cam_unproject(&rc->cam, uv, xn);
     if (st != RP_OK) {
@@ -136,7 +170,8 @@ static rp_status_t init_feature(const rp_vo_gc_t *vo, uint8_t cam, const rp_real
     const rp_real d[3] = {xn[0], xn[1], RP_C(1.0)};
     const rp_real dn = rp_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     /* on the plane z = depth, or on the sphere of radius depth around the camera */
-    const rp_real z = vo->cfg.init_on_sphere ? vo->cfg.init_depth_m / dn : vo->cfg.init_depth_m;
+    const rp_real depth = depth_m; /* in map units */
+    const rp_real z = vo->cfg.init_on_sphere ? depth / dn : depth;
     const rp_real P[3] = {z * d[0], z * d[1], z};
     const rp_real range = z * dn;
     const rp_real u[3] = {d[0] / dn, d[1] / dn, d[2] / dn};
@@ -148,8 +183,8 @@ static rp_status_t init_feature(const rp_vo_gc_t *vo, uint8_t cam, const rp_real
                  range * range * (Ppp[21] + Ppp[28] + Ppp[35]) / RP_C(3.0);
     }
     /* variance of z: the configured sigma is on z (plane) or on the range (sphere) */
-    const rp_real sz = vo->cfg.init_on_sphere ? vo->cfg.init_depth_sigma_m / dn
-                                              : vo->cfg.init_depth_sigma_m;
+    const rp_real sd = vo->cfg.init_depth_sigma_m * vo->mu;
+    const rp_real sz = vo->cfg.init_on_sphere ? sd / dn : sd;
     const rp_real sz2 = sz * sz;
     rp_real Cc[9];
     for (int a = 0; a < 3; ++a) {
@@ -187,7 +222,7 @@ static rp_status_t init_feature(const rp_vo_gc_t *vo, uint8_t cam, const rp_real
             Cw[a * 3 + b] = acc;
         }
     }
-    st = rp_rig_world_point(vo->rig, cam, pl, P, pt->M);
+    st = rp_rig_world_point(&vo->rig_m, cam, pl, P, pt->M);
     if (st != RP_OK) {
         return st;
     }
@@ -209,13 +244,14 @@ static uint16_t top_up_camera(rp_vo_gc_t *vo, const rp_frameset_t *fs, uint8_t c
                               const rp_pose_lin_t *pl, const rp_real *Ppp)
 {
     uint16_t added = 0;
+    const rp_real depth = vo->cfg.init_depth_m * vo->mu; /* map units */
     for (uint16_t f = 0; f < fs->n[cam]; ++f) {
         const rp_feat_t *ft = &fs->f[cam][f];
         if (ft->id == RP_VO_GC_EMPTY_ID || !rp_all_finite(ft->uv, 2) || lm_find(vo, ft->id)) {
             continue;
         }
         rp_point3_t pt;
-        if (init_feature(vo, cam, ft->uv, pl, Ppp, &pt) != RP_OK) {
+        if (init_feature(vo, cam, ft->uv, pl, Ppp, depth, &pt) != RP_OK) {
             continue;
         }
         if (lm_insert(vo, ft->id, cam, &pt) != RP_OK) {
@@ -268,7 +304,7 @@ static rp_real proj_var_max(const rp_real *J, int n, const rp_real *C, int packe
 static void ray_sigma(const rp_vo_gc_t *vo, const rp_gc_landmark_t *l, const rp_pose_lin_t *pl,
                       rp_real *sigma, rp_real *range)
 {
-    const rp_rig_cam_t *rc = &vo->rig->cam[l->cam];
+    const rp_rig_cam_t *rc = &vo->rig_m.cam[l->cam];
     rp_real c[3], u[3];
     for (int a = 0; a < 3; ++a) {
         c[a] = pl->p[a] + pl->R[a * 3 + 0] * rc->D[0] + pl->R[a * 3 + 1] * rc->D[1] +
@@ -335,18 +371,22 @@ static void fill_estimate(const rp_vo_gc_t *vo, const rp_frameset_t *fs, uint32_
 {
     est->utime = fs ? fs->utime : vo->prev_utime;
     est->frame = vo->frame;
+    /* map units -> metres: translations and their velocities divided by mu */
+    const rp_real im = RP_C(1.0) / vo->mu;
     for (int i = 0; i < 6; ++i) {
-        est->p[i] = vo->ekf.x[i];
-        est->v[i] = vo->ekf.x[6 + i];
+        const rp_real si = i < 3 ? im : RP_C(1.0);
+        est->p[i] = si * vo->ekf.x[i];
+        est->v[i] = si * vo->ekf.x[6 + i];
         for (int j = 0; j < 6; ++j) {
-            est->cov[i * 6 + j] = vo->ekf.P[i * RP_EKF_N + j];
+            const rp_real sj = j < 3 ? im : RP_C(1.0);
+            est->cov[i * 6 + j] = si * sj * vo->ekf.P[i * RP_EKF_N + j];
         }
     }
-    /* the map's scale uncertainty, common to every landmark */
-    const rp_real s2 = vo->cfg.scale_sigma * vo->cfg.scale_sigma;
+    /* the map's scale uncertainty, common to every landmark (and the estimated unit's) */
+    const rp_real s2 = vo->cfg.scale_sigma * vo->cfg.scale_sigma + vo->mu_var * im * im;
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            est->cov[i * 6 + j] += s2 * vo->ekf.x[i] * vo->ekf.x[j];
+            est->cov[i * 6 + j] += s2 * est->p[i] * est->p[j];
         }
     }
     const rp_real r2 = vo->cfg.rot_drift_sigma * vo->cfg.rot_drift_sigma * (rp_real)vo->frame;
@@ -384,6 +424,8 @@ static void pose_cov(const rp_vo_gc_t *vo, rp_real Ppp[36])
 
 /* ---- the step ---------------------------------------------------------------------------- */
 
+static void metric_scale(rp_vo_gc_t *vo, const rp_frameset_t *fs);
+
 static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
 {
     static const rp_real zero[6] = {0};
@@ -391,6 +433,14 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
     (void)rp_pose_lin_set(&pl, zero);
     (void)rp_idmap_clear(&vo->map);
     start_ekf(vo);
+    set_mu(vo, RP_C(1.0));
+    vo->mu_var = vo->cfg.mscale_sigma * vo->cfg.mscale_sigma;
+    (void)rp_gcba_reset(&vo->ba, vo->cfg.mscale_sigma > RP_C(0.0) ? vo->cfg.ba_kf : 3);
+    vo->kf_since = 0;
+    vo->n_ba = 0;
+    vo->n_ba_rejected = 0;
+    vo->ba_refused_run = 0;
+    memset(&vo->ba_last, 0, sizeof(vo->ba_last));
     uint32_t flags = RP_EST_INITIALISING;
     for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
         const uint8_t cam = vo->cfg.cams[k];
@@ -399,6 +449,7 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
             flags |= RP_EST_DEGRADED;
         }
     }
+    metric_scale(vo, fs);
     vo->frame = 1;
     vo->prev_utime = fs->utime;
     fill_estimate(vo, fs, flags | RP_EST_SCALE_WEAK, est);
@@ -421,7 +472,7 @@ static uint32_t select_for_pose(rp_vo_gc_t *vo, uint32_t n, uint32_t *n_mature)
         rp_obs_t *o = &vo->obs[i];
         rp_real uv[2], JM[6];
         vo->in_pose[i] = 0;
-        if (!l || rp_rig_project(vo->rig, o->cam, &pl, o->M, uv, NULL, JM) != RP_OK) {
+        if (!l || rp_rig_project(&vo->rig_m, o->cam, &pl, o->M, uv, NULL, JM) != RP_OK) {
             o->w = RP_C(0.0);
             continue;
         }
@@ -459,6 +510,222 @@ static uint32_t select_for_pose(rp_vo_gc_t *vo, uint32_t n, uint32_t *n_mature)
     return m;
 }
 
+/* A new map unit: offsets D_k * mu. Each landmark moves with its camera's centre at the
+ * current pose (by R_j D_k (mu - mu_old)), so that its ray from that camera stays as it was:
+ * the landmarks' depths were measured from the cameras, in map units. */
+static void change_mu(rp_vo_gc_t *vo, rp_real mu)
+{
+    rp_pose_lin_t pl;
+    const rp_real dmu = mu - vo->mu;
+    if (rp_pose_lin_set(&pl, vo->ekf.x) == RP_OK) {
+        for (uint16_t slot = 0; slot < RP_IDMAP_MAX_SLOTS; ++slot) {
+            if (vo->map.slot_id[slot] == RP_IDMAP_EMPTY) {
+                continue;
+            }
+            rp_gc_landmark_t *l = &vo->lm[slot];
+            const rp_real *D = vo->rig->cam[l->cam].D;
+            for (int a = 0; a < 3; ++a) {
+                l->pt.M[a] += dmu * (pl.R[a * 3 + 0] * D[0] + pl.R[a * 3 + 1] * D[1] +
+                                     pl.R[a * 3 + 2] * D[2]);
+            }
+        }
+    }
+    set_mu(vo, mu);
+}
+
+/* After an adjustment: the window's poses in map units (the oldest keyframe stays where it was,
+ * the others follow the solution's motion from it at the new map unit) go back into the ring,
+ * and the filter's pose becomes the newest keyframe's (this frame's), the map following it
+ * rigidly so that every landmark keeps its place relative to the rig. */
+static void correct_pose(rp_vo_gc_t *vo)
+{
+    const uint8_t nk = vo->ba.n_kf;
+    rp_real p0[6], s0[6], pk[6], sk[6];
+    if (rp_gcba_kf_pose(&vo->ba, 0, p0) != RP_OK || rp_gcba_solved_pose(&vo->ba, 0, s0) != RP_OK) {
+        return;
+    }
+    for (uint8_t k = 1; k < nk; ++k) {
+        if (rp_gcba_solved_pose(&vo->ba, k, sk) != RP_OK) {
+            return;
+        }
+        for (int a = 0; a < 3; ++a) {
+            pk[a] = p0[a] + vo->mu * (sk[a] - s0[a]);
+            pk[3 + a] = sk[3 + a];
+        }
+        (void)rp_gcba_set_pose(&vo->ba, k, pk);
+    }
+    /* pk: the newest keyframe = this frame; correction T_c = T_new T_old^-1 */
+    rp_real Ro[9], Rn[9], Rc[9], tc[3], t[3];
+    rp_rot_from_angles(&vo->ekf.x[3], Ro);
+    rp_rot_from_angles(&pk[3], Rn);
+    rp_rot_mul_a_bt(Rn, Ro, Rc);
+    rp_rot_apply(Rc, vo->ekf.x, t);
+    for (int a = 0; a < 3; ++a) {
+        tc[a] = pk[a] - t[a];
+    }
+    for (uint16_t slot = 0; slot < RP_IDMAP_MAX_SLOTS; ++slot) {
+        if (vo->map.slot_id[slot] == RP_IDMAP_EMPTY) {
+            continue;
+        }
+        rp_point3_t *pt = &vo->lm[slot].pt;
+        rp_real M[3], C[9], T[9], Cn[9];
+        rp_rot_apply(Rc, pt->M, M);
+        for (int a = 0; a < 3; ++a) {
+            pt->M[a] = M[a] + tc[a];
+        }
+        const rp_real *c = pt->C;
+        C[0] = c[0]; C[1] = c[1]; C[2] = c[2];
+        C[3] = c[1]; C[4] = c[3]; C[5] = c[4];
+        C[6] = c[2]; C[7] = c[4]; C[8] = c[5];
+        rp_rot_mul(Rc, C, T);
+        rp_rot_mul_a_bt(T, Rc, Cn);
+        pt->C[0] = Cn[0];
+        pt->C[1] = RP_C(0.5) * (Cn[1] + Cn[3]);
+        pt->C[2] = RP_C(0.5) * (Cn[2] + Cn[6]);
+        pt->C[3] = Cn[4];
+        pt->C[4] = RP_C(0.5) * (Cn[5] + Cn[7]);
+        pt->C[5] = Cn[8];
+    }
+    /* the adjusted landmarks replace the filter's, in map units */
+    for (uint16_t i = 0; i < vo->ba.n_lm_tab; ++i) {
+        uint32_t id;
+        uint8_t cam;
+        rp_real X[3], C[6];
+        rp_gc_landmark_t *l;
+        if (rp_gcba_landmark(&vo->ba, i, &id, &cam, X, C) != RP_OK || !(l = lm_find(vo, id)) ||
+            l->cam != cam) {
+            continue;
+        }
+        const rp_real m2 = vo->mu * vo->mu;
+        for (int a = 0; a < 3; ++a) {
+            l->pt.M[a] = p0[a] + vo->mu * (X[a] - s0[a]);
+        }
+        for (int a = 0; a < 6; ++a) {
+            l->pt.C[a] = m2 * C[a];
+        }
+    }
+    rp_real v[3];
+    rp_rot_apply(Rc, &vo->ekf.x[6], v);
+    for (int a = 0; a < 3; ++a) {
+        vo->ekf.x[a] = pk[a];
+        vo->ekf.x[3 + a] = pk[3 + a];
+        vo->ekf.x[6 + a] = v[a];
+    }
+}
+
+/* Reorder h[0..n) (and idx with it) so that its want lowest values come first (quickselect). */
+static void select_lowest(uint32_t *h, uint16_t *idx, uint16_t n, uint16_t want)
+{
+    int lo = 0, hi = (int)n - 1;
+    const int k = (int)want - 1;
+    while (lo < hi) {
+        const uint32_t pivot = h[(lo + hi) / 2];
+        int i = lo, j = hi;
+        while (i <= j) {
+            while (h[i] < pivot) {
+                i++;
+            }
+            while (h[j] > pivot) {
+                j--;
+            }
+            if (i <= j) {
+                const uint32_t th = h[i];
+                const uint16_t ti = idx[i];
+                h[i] = h[j];
+                idx[i] = idx[j];
+                h[j] = th;
+                idx[j] = ti;
+                i++;
+                j--;
+            }
+        }
+        if (k <= j) {
+            hi = j;
+        } else if (k >= i) {
+            lo = i;
+        } else {
+            break;
+        }
+    }
+}
+
+/* Step 6 (rp_vo_gc.h): keep this frame as a keyframe every ba_stride frames and, every ba_every
+ * keyframes, fuse the map's unit that the window's adjustment implies. */
+static void metric_scale(rp_vo_gc_t *vo, const rp_frameset_t *fs)
+{
+    if (!(vo->cfg.mscale_sigma > RP_C(0.0))) {
+        return;
+    }
+    vo->mu_var += vo->cfg.mscale_q * vo->mu * vo->mu;
+    if (vo->frame % vo->cfg.ba_stride != 0) {
+        return;
+    }
+    /* per camera, the ba_per_cam landmarks whose ids hash lowest: mostly the same ones from
+     * one keyframe to the next, as long as they live */
+    rp_gcba_obs_t *o = vo->kf_obs;
+    uint16_t m = 0;
+    for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
+        const uint8_t cam = vo->cfg.cams[k];
+        uint16_t nc = 0;
+        for (uint16_t f = 0; f < fs->n[cam]; ++f) {
+            const rp_feat_t *ft = &fs->f[cam][f];
+            const rp_gc_landmark_t *l;
+            if (!rp_all_finite(ft->uv, 2) || !(l = lm_find(vo, ft->id)) || l->cam != cam) {
+                continue;
+            }
+            vo->kf_hash[nc] = rp_idmap_hash(ft->id);
+            vo->kf_feat[nc] = f;
+            nc++;
+        }
+        const uint16_t want = vo->cfg.ba_per_cam;
+        if (nc > want) {
+            select_lowest(vo->kf_hash, vo->kf_feat, nc, want);
+            nc = want;
+        }
+        for (uint16_t i = 0; i < nc && m < RP_GCBA_MAX_OBS_KF; ++i) {
+            const rp_feat_t *ft = &fs->f[cam][vo->kf_feat[i]];
+            o[m].id = ft->id;
+            o[m].uv[0] = (float)ft->uv[0];
+            o[m].uv[1] = (float)ft->uv[1];
+            o[m].cam = cam;
+            m++;
+        }
+    }
+    if (rp_gcba_add_keyframe(&vo->ba, vo->ekf.x, o, m) != RP_OK) {
+        return;
+    }
+    if (++vo->kf_since < vo->cfg.ba_every || vo->ba.n_kf < 3) {
+        return;
+    }
+    vo->kf_since = 0;
+    rp_gcba_result_t *r = &vo->ba_last;
+    const rp_status_t st = rp_gcba_scale(&vo->ba, vo->rig, vo->mu, &vo->cfg.ba, r);
+    const rp_real var_obs = r->mu_var * vo->cfg.ba_var_scale;
+    const rp_real dm = r->mu - vo->mu;
+    /* refused: a failed or unconverged adjustment (residuals well above the pixel noise), or
+     * one more than 4 sigma from the current unit; after ba_max_refused refusals in a row of
+     * converged adjustments the current unit is the suspect: it restarts from the next one */
+    if (st != RP_OK || r->rms_px > RP_C(1.5) * vo->cfg.ba.sigma_px) {
+        vo->n_ba_rejected++;
+        return;
+    }
+    if (dm * dm > RP_C(16.0) * (vo->mu_var + var_obs)) {
+        vo->n_ba_rejected++;
+        if (++vo->ba_refused_run < 2) {
+            return;
+        }
+        vo->mu_var = vo->cfg.mscale_sigma * vo->cfg.mscale_sigma * vo->mu * vo->mu;
+    }
+    vo->ba_refused_run = 0;
+    /* scalar Kalman update of mu with the window's value */
+    const rp_real k = vo->mu_var / (vo->mu_var + var_obs);
+    const rp_real mu = vo->mu + k * (r->mu - vo->mu);
+    vo->mu_var = (RP_C(1.0) - k) * vo->mu_var;
+    change_mu(vo, mu);
+    vo->n_ba++;
+    correct_pose(vo);
+}
+
 /* Each observed landmark's structure EKF takes its pixel at the updated pose, with the pose's
  * projected uncertainty added to the pixel noise. */
 static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
@@ -476,13 +743,13 @@ static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
             continue;
         }
         rp_real uv[2], Jp[12];
-        if (rp_rig_project(vo->rig, l->cam, &pl, l->pt.M, uv, Jp, NULL) != RP_OK) {
+        if (rp_rig_project(&vo->rig_m, l->cam, &pl, l->pt.M, uv, Jp, NULL) != RP_OK) {
             continue;
         }
         const rp_real lam = proj_var_max(Jp, 6, Ppp, 0);
         const rp_real sig = rp_sqrt(s2 + (lam > RP_C(0.0) ? lam : RP_C(0.0)));
         /* a rejected update leaves the point as it was */
-        (void)rp_struct_update(&l->pt, vo->rig, l->cam, &pl, vo->obs[i].uv, sig,
+        (void)rp_struct_update(&l->pt, &vo->rig_m, l->cam, &pl, vo->obs[i].uv, sig,
                                vo->cfg.ekf.gate_chi2);
     }
 }
@@ -528,7 +795,7 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
     if (st == RP_OK) {
         const uint32_t m = select_for_pose(vo, n, &n_mature);
         rp_ekf_info_t info;
-        st = rp_ekf_update(&vo->ekf, vo->rig, vo->pobs, m, vo->pused, &info);
+        st = rp_ekf_update(&vo->ekf, &vo->rig_m, vo->pobs, m, vo->pused, &info);
         n_gated = info.n_gated;
         if (info.cov_reset) {
             flags |= RP_EST_COV_RESET;
@@ -555,6 +822,7 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
             flags |= RP_EST_SCALE_WEAK;
         }
         refine_structure(vo, n);
+        metric_scale(vo, fs);
     } else {
         flags |= RP_EST_LOST;
     }

@@ -30,6 +30,14 @@
  *     pose (no backtracking is needed: the new landmarks' depths are unknown anyway, and they
  *     enter the pose update only once converged). The across-ray covariance of a topped-up
  *     landmark includes the pose uncertainty.
+ *  6. Metric scale (mscale_sigma > 0; beyond the paper). The map is kept in map units, and the
+ *     rig offsets the filter projects with are D_k * mu, mu the map units per metre; output
+ *     translations are divided by mu, new features start at init_depth_m * mu. Every ba_stride
+ *     frames the updated pose and the pixels of a fixed share (ba_frac) of the landmarks are
+ *     kept as a keyframe; every ba_every keyframes a window bundle adjustment in metres over the
+ *     last ba_kf keyframes (rp_gcba.h) says which mu the window implies, and a scalar filter
+ *     (prior 1 +- mscale_sigma) takes it, with its variance times ba_var_scale. An adjustment
+ *     that fails, or implies mu more than 30 % off the current, is not taken (n_ba_rejected).
  *  5. Reported covariance. The pose EKF treats the landmarks' errors as independent, but they
  *     are not (every landmark was placed from estimated poses and one assumed depth), so its
  *     own covariance is far too small (NEES ~1e4 in the simulation). The estimate's covariance
@@ -43,6 +51,7 @@
 
 #include "rp_ekf.h"
 #include "rp_frame.h"
+#include "rp_gcba.h"
 #include "rp_idmap.h"
 #include "rp_obs.h"
 #include "rp_rig.h"
@@ -81,6 +90,18 @@ typedef struct {
     rp_real rot_drift_sigma;      /* orientation drift of the map, rad per sqrt(frame): adds
                                    * rot_drift_sigma^2 * frame to the reported variance of each
                                    * angle (not to the filter's) */
+    rp_real mscale_sigma;         /* step 6, the metric scale from the offsets: prior relative
+                                   * standard deviation of the map's unit in metres; 0: off (the
+                                   * map's unit is the metre: the scale is the assumed depth's) */
+    rp_real mscale_q;             /* its random walk: relative variance added per frame */
+    uint8_t ba_stride;            /* frames between keyframes (>= 1 when step 6 is on) */
+    uint8_t ba_kf;                /* keyframes per window, 3..RP_GCBA_MAX_KF */
+    uint8_t ba_every;             /* adjust the window every this many keyframes, >= 1 */
+    uint16_t ba_per_cam;          /* landmarks per camera kept in a keyframe, >= 8 (those whose
+                                   * ids hash lowest: mostly the same ones in every keyframe) */
+    rp_real ba_var_scale;         /* a window's scale variance is multiplied by this before it
+                                   * is fused (windows overlap: they share observations), >= 1 */
+    rp_gcba_cfg_t ba;             /* the adjustment (rp_gcba.h) */
 } rp_vo_gc_cfg_t;
 
 /* Defaults: the paper's threshold of 50, plane at 1 m +- 0.3 m, mature at 2 % of the range
@@ -99,6 +120,18 @@ typedef struct {
 
 typedef struct {
     const rp_rig_t *rig;
+    rp_rig_t rig_m;                        /* the rig in map units: offsets D_k * mu */
+    rp_real mu;                            /* map units per metre (1 unless mscale_sigma > 0) */
+    rp_real mu_var;                        /* its variance */
+    rp_gcba_t ba;                          /* step 6's keyframe window */
+    uint8_t kf_since;                      /* keyframes since the last adjustment */
+    uint16_t n_ba;                         /* adjustments fused since the first frame */
+    uint16_t n_ba_rejected;                /* adjustments that failed or were refused */
+    uint8_t ba_refused_run;                /* converged ones refused in a row */
+    rp_gcba_result_t ba_last;              /* the last adjustment's result */
+    rp_gcba_obs_t kf_obs[RP_GCBA_MAX_OBS_KF]; /* scratch: a keyframe's observations */
+    uint32_t kf_hash[RP_MAX_FEATS_PER_CAM];   /* scratch: one camera's id hashes */
+    uint16_t kf_feat[RP_MAX_FEATS_PER_CAM];   /* and their feature indices */
     rp_vo_gc_cfg_t cfg;
     rp_ekf_t ekf;
     rp_idmap_t map;                        /* feature id -> slot in lm; group = the camera
