@@ -30,14 +30,23 @@
  *     pose (no backtracking is needed: the new landmarks' depths are unknown anyway, and they
  *     enter the pose update only once converged). The across-ray covariance of a topped-up
  *     landmark includes the pose uncertainty.
- *  6. Metric scale (mscale_sigma > 0; beyond the paper). The map is kept in map units, and the
- *     rig offsets the filter projects with are D_k * mu, mu the map units per metre; output
- *     translations are divided by mu, new features start at init_depth_m * mu. Every ba_stride
- *     frames the updated pose and the pixels of a fixed share (ba_frac) of the landmarks are
- *     kept as a keyframe; every ba_every keyframes a window bundle adjustment in metres over the
- *     last ba_kf keyframes (rp_gcba.h) says which mu the window implies, and a scalar filter
- *     (prior 1 +- mscale_sigma) takes it, with its variance times ba_var_scale. An adjustment
- *     that fails, or implies mu more than 30 % off the current, is not taken (n_ba_rejected).
+ *  6. Metric scale (mscale_sigma > 0; beyond the paper). Steps 1-3 alone take the metric scale
+ *     from the assumed depth, for good: landmarks are refined by parallax against the filter's
+ *     own translations, so map and trajectory can be wrong by one common factor that no single
+ *     frame shows. The map is therefore kept in map units: the offsets the filter projects
+ *     with are D_k * mu (mu: map units per metre), output translations are divided by mu, new
+ *     features start at init_depth_m * mu. Every ba_stride frames the updated pose and the
+ *     pixels of ba_per_cam landmarks per camera become a keyframe; every ba_every keyframes
+ *     (from the third on) a window bundle adjustment in metres over the last ba_kf keyframes
+ *     (rp_gcba.h) says which mu the window implies, and a scalar filter on mu (prior
+ *     1 +- mscale_sigma) takes it with its variance times ba_var_scale. Refused (counted in
+ *     n_ba_rejected): a failed adjustment, one whose RMS residual stays over 1.5 ba.sigma_px,
+ *     one more than 4 sigma from the current mu (after two such refusals in a row the current
+ *     mu is the suspect: its variance goes back to the prior and the next one is taken).
+ *     A taken adjustment also (a) moves each landmark with its camera's centre at the new
+ *     offsets, (b) writes the window's solved poses back into the keyframes, (c) sets the
+ *     filter's pose to the newest keyframe's solution, the map following rigidly, and
+ *     (d) replaces the adjusted landmarks' positions and covariances by the solution's.
  *  5. Reported covariance. The pose EKF treats the landmarks' errors as independent, but they
  *     are not (every landmark was placed from estimated poses and one assumed depth), so its
  *     own covariance is far too small (NEES ~1e4 in the simulation). The estimate's covariance
@@ -106,7 +115,10 @@ typedef struct {
 
 /* Defaults: the paper's threshold of 50, plane at 1 m +- 0.3 m, mature at 2 % of the range
  * (at least 50 mature landmarks, else all enter), no information cap, reported scale sigma 2 %,
- * position drift 4e-5 m and orientation drift 1e-4 rad per sqrt(frame), 1/30 s. */
+ * position drift 6e-5 m and orientation drift 1e-4 rad per sqrt(frame), 1/30 s; step 6 on:
+ * map unit prior 1 +- 0.3, no random walk, a keyframe every 4 frames with 80 landmarks per
+ * camera, windows of 6 keyframes adjusted every 2 keyframes (2 Gauss-Newton iterations), the
+ * window's variance times 3. */
 rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void);
 
 typedef struct {
