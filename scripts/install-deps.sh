@@ -26,8 +26,8 @@ missing=()
 is_installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
 
 pkgs=()
-py_pkgs=(lcm evo)
-py_imports="import lcm, evo"
+py_pkgs=(lcm evo numpy)
+py_imports="import lcm, evo, numpy"
 VENV=${RIGPOSE_VENV:-$(cd "$(dirname "$0")/.." && pwd)/.venv}
 
 case "$want" in
