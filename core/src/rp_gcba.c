@@ -29,13 +29,15 @@ rp_status_t rp_gcba_reset(rp_gcba_t *ba, uint8_t max_kf)
     ba->cap = max_kf;
     ba->n_kf = 0;
     ba->head = 0;
+    ba->state = RP_GCBA_IDLE;
     return RP_OK;
 }
 
 rp_status_t rp_gcba_add_keyframe(rp_gcba_t *ba, const rp_real p[6], const rp_gcba_obs_t *obs,
                                  uint16_t n)
 {
-    if (!ba || !p || (n > 0 && !obs) || ba->cap < 3 || ba->cap > RP_GCBA_MAX_KF) {
+    if (!ba || !p || (n > 0 && !obs) || ba->cap < 3 || ba->cap > RP_GCBA_MAX_KF ||
+        ba->state != RP_GCBA_IDLE) {
         return RP_E_ARG;
     }
     if (!rp_all_finite(p, 6)) {
@@ -424,22 +426,26 @@ static void back_substitute(rp_gcba_t *ba, const rp_rig_t *rig, uint16_t n_lm, i
     }
 }
 
-rp_status_t rp_gcba_scale(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
-                          const rp_gcba_cfg_t *cfg, rp_gcba_result_t *res)
+rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
+                          const rp_gcba_cfg_t *cfg)
 {
-    if (!ba || !rig || !cfg || !res || !(mu > RP_C(0.0)) || !rp_finite(mu) ||
+    if (!ba || !rig || !cfg || !(mu > RP_C(0.0)) || !rp_finite(mu) ||
         cfg->iterations < 1 || cfg->min_obs < 2 || !(cfg->sigma_px > RP_C(0.0)) ||
         !(cfg->huber_px > RP_C(0.0)) || !(cfg->min_angle >= RP_C(0.0)) ||
         !rp_finite(cfg->sigma_px) || !rp_finite(cfg->huber_px) || !rp_finite(cfg->min_angle)) {
         return RP_E_ARG;
     }
-    memset(res, 0, sizeof(*res));
+    ba->state = RP_GCBA_IDLE;
+    ba->rig = rig;
+    ba->cfg = *cfg;
+    ba->it = 0;
+    memset(&ba->res, 0, sizeof(ba->res));
     const int nk = ba->n_kf;
-    res->n_kf = (uint16_t)nk;
+    ba->res.n_kf = (uint16_t)nk;
+    ba->n_lm_tab = 0;
     if (nk < 3) {
         return RP_E_TOO_FEW;
     }
-    const int np = 6 * (nk - 1);
     for (int k = 0; k < nk; ++k) {
         const rp_gcba_kf_t *kf = kf_at(ba, k);
         for (int a = 0; a < 6; ++a) {
@@ -449,7 +455,6 @@ rp_status_t rp_gcba_scale(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     /* group the observations by landmark */
     memset(ba->hash, 0, sizeof(ba->hash));
     uint16_t n_lm = 0;
-    ba->n_lm_tab = 0;
     for (int k = 0; k < nk; ++k) {
         const rp_gcba_kf_t *kf = kf_at(ba, k);
         for (uint16_t i = 0; i < kf->n; ++i) {
@@ -498,55 +503,92 @@ rp_status_t rp_gcba_scale(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     if (usable < 12) {
         return RP_E_TOO_FEW;
     }
+    ba->state = RP_GCBA_STARTED;
+    return RP_OK;
+}
 
+rp_status_t rp_gcba_step(rp_gcba_t *ba)
+{
+    if (!ba || ba->state == RP_GCBA_IDLE) {
+        return RP_E_ARG;
+    }
+    if (ba->state == RP_GCBA_SOLVED) {
+        return RP_OK;
+    }
+    const rp_rig_t *rig = ba->rig;
+    const rp_gcba_cfg_t *cfg = &ba->cfg;
+    const int nk = ba->n_kf, np = 6 * (nk - 1);
+    const uint16_t n_lm = ba->n_lm_tab;
+    if (ba->state == RP_GCBA_STARTED) {
+        /* the first normal equations, at the triangulated start */
+        ba->cost = build(ba, rig, n_lm, nk, cfg, &ba->n_obs, &ba->sq);
+        ba->res.rms0_px = (rp_real)rp_sqrt_d(ba->sq / (2.0 * (ba->n_obs > 0 ? ba->n_obs : 1)));
+        ba->state = RP_GCBA_ITERATING;
+        return RP_OK;
+    }
     /* Gauss-Newton (Levenberg-damped), a step kept only if it lowers the robust cost */
-    uint16_t n_obs = 0;
-    double sq = 0.0;
-    double cost = build(ba, rig, n_lm, nk, cfg, &n_obs, &sq);
-    res->rms0_px = (rp_real)rp_sqrt_d(sq / (2.0 * (n_obs > 0 ? n_obs : 1)));
-    for (int it = 0; it < cfg->iterations; ++it) {
-        res->iterations = (uint8_t)(it + 1);
-        for (int i = 0; i < np; ++i) {
-            ba->S[i * np + i] *= 1.0 + 1e-4;
-        }
-        if (!chol(ba->S, np)) {
-            return RP_E_SINGULAR;
-        }
-        chol_solve(ba->S, np, ba->g, ba->dx);
-        memcpy(ba->x0, ba->x, sizeof(ba->x0));
-        memcpy(ba->X0, ba->X, sizeof(double) * 3 * n_lm);
-        memcpy(ba->ok0, ba->lm_ok, n_lm);
-        back_substitute(ba, rig, n_lm, nk, cfg);
-        for (int k = 1; k < nk; ++k) {
-            for (int a = 0; a < 6; ++a) {
-                ba->x[k][a] += ba->dx[6 * (k - 1) + a];
-            }
-        }
-        uint16_t n2 = 0;
-        double sq2 = 0.0;
-        const double c2 = build(ba, rig, n_lm, nk, cfg, &n2, &sq2);
-        if (!(c2 <= cost) || n2 < n_obs / 2) {
-            /* worse: back to the previous estimate and its equations, and stop */
-            memcpy(ba->x, ba->x0, sizeof(ba->x0));
-            memcpy(ba->X, ba->X0, sizeof(double) * 3 * n_lm);
-            memcpy(ba->lm_ok, ba->ok0, n_lm);
-            cost = build(ba, rig, n_lm, nk, cfg, &n_obs, &sq);
-            break;
-        }
-        const double gain = (cost - c2) / (cost > 0.0 ? cost : 1.0);
-        cost = c2;
-        n_obs = n2;
-        sq = sq2;
-        if (gain < 1e-4) {
-            break; /* converged */
+    ba->res.iterations = (uint8_t)++ba->it;
+    for (int i = 0; i < np; ++i) {
+        ba->S[i * np + i] *= 1.0 + 1e-4;
+    }
+    if (!chol(ba->S, np)) {
+        ba->state = RP_GCBA_IDLE;
+        return RP_E_SINGULAR;
+    }
+    chol_solve(ba->S, np, ba->g, ba->dx);
+    memcpy(ba->x0, ba->x, sizeof(ba->x0));
+    memcpy(ba->X0, ba->X, sizeof(double) * 3 * n_lm);
+    memcpy(ba->ok0, ba->lm_ok, n_lm);
+    back_substitute(ba, rig, n_lm, nk, cfg);
+    for (int k = 1; k < nk; ++k) {
+        for (int a = 0; a < 6; ++a) {
+            ba->x[k][a] += ba->dx[6 * (k - 1) + a];
         }
     }
-    res->rms_px = (rp_real)rp_sqrt_d(sq / (2.0 * (n_obs > 0 ? n_obs : 1)));
-    res->n_obs = n_obs;
-    res->n_lm = 0;
+    uint16_t n2 = 0;
+    double sq2 = 0.0;
+    const double c2 = build(ba, rig, n_lm, nk, cfg, &n2, &sq2);
+    if (!(c2 <= ba->cost) || n2 < ba->n_obs / 2) {
+        /* worse: back to the previous estimate and its equations, and stop */
+        memcpy(ba->x, ba->x0, sizeof(ba->x0));
+        memcpy(ba->X, ba->X0, sizeof(double) * 3 * n_lm);
+        memcpy(ba->lm_ok, ba->ok0, n_lm);
+        ba->cost = build(ba, rig, n_lm, nk, cfg, &ba->n_obs, &ba->sq);
+        ba->state = RP_GCBA_SOLVED;
+        return RP_OK;
+    }
+    const double gain = (ba->cost - c2) / (ba->cost > 0.0 ? ba->cost : 1.0);
+    ba->cost = c2;
+    ba->n_obs = n2;
+    ba->sq = sq2;
+    if (gain < 1e-4 || ba->it >= cfg->iterations) {
+        ba->state = RP_GCBA_SOLVED; /* converged, or out of iterations */
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_gcba_finish(rp_gcba_t *ba, rp_gcba_result_t *res)
+{
+    if (!ba || !res || ba->state == RP_GCBA_IDLE) {
+        return RP_E_ARG;
+    }
+    while (ba->state != RP_GCBA_SOLVED) {
+        const rp_status_t st = rp_gcba_step(ba);
+        if (st != RP_OK) {
+            *res = ba->res;
+            return st;
+        }
+    }
+    ba->state = RP_GCBA_IDLE;
+    const int nk = ba->n_kf, np = 6 * (nk - 1);
+    const uint16_t n_lm = ba->n_lm_tab;
+    ba->res.rms_px = (rp_real)rp_sqrt_d(ba->sq / (2.0 * (ba->n_obs > 0 ? ba->n_obs : 1)));
+    ba->res.n_obs = ba->n_obs;
+    ba->res.n_lm = 0;
     for (int L = 0; L < n_lm; ++L) {
-        res->n_lm = (uint16_t)(res->n_lm + (ba->lm_ok[L] ? 1 : 0));
+        ba->res.n_lm = (uint16_t)(ba->res.n_lm + (ba->lm_ok[L] ? 1 : 0));
     }
+    *res = ba->res;
 
     /* the map's unit the solution implies, and its variance through the normal matrix */
     double num = 0.0, den = 0.0;
@@ -586,6 +628,23 @@ rp_status_t rp_gcba_scale(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     res->mu = (rp_real)m;
     res->mu_var = (rp_real)var;
     return RP_OK;
+}
+
+rp_status_t rp_gcba_scale(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
+                          const rp_gcba_cfg_t *cfg, rp_gcba_result_t *res)
+{
+    if (!res) {
+        return RP_E_ARG;
+    }
+    rp_status_t st = rp_gcba_start(ba, rig, mu, cfg);
+    if (st != RP_OK) {
+        memset(res, 0, sizeof(*res));
+        if (ba) {
+            *res = ba->res;
+        }
+        return st;
+    }
+    return rp_gcba_finish(ba, res);
 }
 
 rp_status_t rp_gcba_kf_pose(const rp_gcba_t *ba, uint8_t k, rp_real p[6])

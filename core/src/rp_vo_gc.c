@@ -540,8 +540,9 @@ static void change_mu(rp_vo_gc_t *vo, rp_real mu)
 static void correct_pose(rp_vo_gc_t *vo)
 {
     const uint8_t nk = vo->ba.n_kf;
-    rp_real p0[6], s0[6], pk[6], sk[6];
-    if (rp_gcba_kf_pose(&vo->ba, 0, p0) != RP_OK || rp_gcba_solved_pose(&vo->ba, 0, s0) != RP_OK) {
+    rp_real p0[6], s0[6], pk[6], sk[6], po[6];
+    if (rp_gcba_kf_pose(&vo->ba, 0, p0) != RP_OK || rp_gcba_solved_pose(&vo->ba, 0, s0) != RP_OK ||
+        rp_gcba_kf_pose(&vo->ba, (uint8_t)(nk - 1), po) != RP_OK) {
         return;
     }
     for (uint8_t k = 1; k < nk; ++k) {
@@ -554,12 +555,12 @@ static void correct_pose(rp_vo_gc_t *vo)
         }
         (void)rp_gcba_set_pose(&vo->ba, k, pk);
     }
-    /* pk: the newest keyframe = this frame; correction T_c = T_new T_old^-1 */
+    /* the newest keyframe, as the filter had it (po) and as solved (pk): T_c = T_pk T_po^-1 */
     rp_real Ro[9], Rn[9], Rc[9], tc[3], t[3];
-    rp_rot_from_angles(&vo->ekf.x[3], Ro);
+    rp_rot_from_angles(&po[3], Ro);
     rp_rot_from_angles(&pk[3], Rn);
     rp_rot_mul_a_bt(Rn, Ro, Rc);
-    rp_rot_apply(Rc, vo->ekf.x, t);
+    rp_rot_apply(Rc, po, t);
     for (int a = 0; a < 3; ++a) {
         tc[a] = pk[a] - t[a];
     }
@@ -604,11 +605,18 @@ static void correct_pose(rp_vo_gc_t *vo)
             l->pt.C[a] = m2 * C[a];
         }
     }
-    rp_real v[3];
+    /* the filter's pose now (a frame or more after the keyframe) follows the same T_c */
+    rp_real v[3], Rj[9], Rnew[9], ang[3];
+    rp_rot_from_angles(&vo->ekf.x[3], Rj);
+    rp_rot_mul(Rc, Rj, Rnew);
+    if (rp_rot_to_angles(Rnew, ang) != RP_OK) {
+        return;
+    }
+    rp_rot_apply(Rc, vo->ekf.x, t);
     rp_rot_apply(Rc, &vo->ekf.x[6], v);
     for (int a = 0; a < 3; ++a) {
-        vo->ekf.x[a] = pk[a];
-        vo->ekf.x[3 + a] = pk[3 + a];
+        vo->ekf.x[a] = t[a] + tc[a];
+        vo->ekf.x[3 + a] = ang[a];
         vo->ekf.x[6 + a] = v[a];
     }
 }
@@ -649,6 +657,8 @@ static void select_lowest(uint32_t *h, uint16_t *idx, uint16_t n, uint16_t want)
     }
 }
 
+static void take_adjustment(rp_vo_gc_t *vo);
+
 /* Step 6 (rp_vo_gc.h): keep this frame as a keyframe every ba_stride frames and, every ba_every
  * keyframes, fuse the map's unit that the window's adjustment implies. */
 static void metric_scale(rp_vo_gc_t *vo, const rp_frameset_t *fs)
@@ -657,8 +667,21 @@ static void metric_scale(rp_vo_gc_t *vo, const rp_frameset_t *fs)
         return;
     }
     vo->mu_var += vo->cfg.mscale_q * vo->mu * vo->mu;
+    /* an adjustment under way advances by one piece per frame (start, steps, result), so no
+     * frame pays for all of it; a keyframe due before it is done finishes it first */
+    if (vo->ba.state == RP_GCBA_STARTED || vo->ba.state == RP_GCBA_ITERATING) {
+        if (rp_gcba_step(&vo->ba) != RP_OK) {
+            vo->n_ba_rejected++;
+        }
+    }
+    if (vo->ba.state == RP_GCBA_SOLVED) {
+        take_adjustment(vo);
+    }
     if (vo->frame % vo->cfg.ba_stride != 0) {
         return;
+    }
+    if (vo->ba.state != RP_GCBA_IDLE) {
+        take_adjustment(vo);
     }
     /* per camera, the ba_per_cam landmarks whose ids hash lowest: mostly the same ones from
      * one keyframe to the next, as long as they live */
@@ -698,12 +721,20 @@ static void metric_scale(rp_vo_gc_t *vo, const rp_frameset_t *fs)
         return;
     }
     vo->kf_since = 0;
+    if (rp_gcba_start(&vo->ba, vo->rig, vo->mu, &vo->cfg.ba) != RP_OK) {
+        vo->n_ba_rejected++;
+    }
+}
+
+/* The adjustment under way is solved: its result into mu, the map and the pose. */
+static void take_adjustment(rp_vo_gc_t *vo)
+{
     rp_gcba_result_t *r = &vo->ba_last;
-    const rp_status_t st = rp_gcba_scale(&vo->ba, vo->rig, vo->mu, &vo->cfg.ba, r);
+    const rp_status_t st = rp_gcba_finish(&vo->ba, r);
     const rp_real var_obs = r->mu_var * vo->cfg.ba_var_scale;
     const rp_real dm = r->mu - vo->mu;
     /* refused: a failed or unconverged adjustment (residuals well above the pixel noise), or
-     * one more than 4 sigma from the current unit; after ba_max_refused refusals in a row of
+     * one more than 4 sigma from the current unit; after two such refusals in a row of
      * converged adjustments the current unit is the suspect: it restarts from the next one */
     if (st != RP_OK || r->rms_px > RP_C(1.5) * vo->cfg.ba.sigma_px) {
         vo->n_ba_rejected++;

@@ -32,6 +32,7 @@
  * usage: rigpose-gcdiag [--runs N] [--first-run R] [--iid-px S] [--cache DIR] [--verbose]
  *                       [--target N] [--topup-below N] [--min-tracked N]
  *                       [--init-depth M] [--init-sigma M] [--mature-frac F] [--min-mature N]
+ *                       [--mscale-sigma S]  (gc's metric scale step, rp_vo_gc.h step 6; 0: off)
  *                       [--surface-sim MIX [--thick T]] [--sim KEEP [--epi]] [render options]
  * --cache DIR keeps the rendered images as PNG files in DIR (read back when present).
  */
@@ -59,6 +60,7 @@ double g_init_depth = 0.0;
 double g_init_sigma = 0.0; /* --init-sigma: gc's depth prior sigma (0: 0.15 m) */
 double g_mature = -1.0;    /* --mature-frac (< 0: default) */
 int g_min_mature = -1;     /* --min-mature (< 0: default) */
+double g_mscale = -1.0;    /* --mscale-sigma: gc's metric scale step prior (0: off; < 0: default) */
 bool g_epi = false;        /* --epi: print the generalised epipolar scale check in --sim */
 
 void apply_gc_opts(rp_vo_gc_cfg_t *c)
@@ -74,6 +76,9 @@ void apply_gc_opts(rp_vo_gc_cfg_t *c)
     }
     if (g_min_mature >= 0) {
         c->min_mature = (uint16_t)g_min_mature;
+    }
+    if (g_mscale >= 0.0) {
+        c->mscale_sigma = (rp_real)g_mscale;
     }
 } /* --init-depth: gc's assumed depth in --sim (0: the shell's mid) */
 
@@ -409,6 +414,7 @@ void usage(FILE *out)
                  "usage: rigpose-gcdiag [--runs N] [--first-run R] [--iid-px S] [--cache DIR]\n"
                  "         [--verbose] [--target N] [--topup-below N] [--min-tracked N]\n"
                  "         [--init-depth M] [--init-sigma M] [--mature-frac F] [--min-mature N]\n"
+                 "         [--mscale-sigma S (gc's metric scale step; 0: off)]\n"
                  "         [--surface-sim MIX [--thick T]] [--sim KEEP [--epi]] [render options]\n"
                  "gc from rendered pixels against gc fed the renderer's true projections with the\n"
                  "tracker's ids (default), or feature-level gc on the rendered surface\n"
@@ -463,6 +469,9 @@ int main(int argc, char **argv)
             ++i;
         } else if (!std::strcmp(a, "--min-mature") && v) {
             g_min_mature = std::atoi(v);
+            ++i;
+        } else if (!std::strcmp(a, "--mscale-sigma") && v) {
+            g_mscale = std::strtod(v, nullptr);
             ++i;
         } else if (!std::strcmp(a, "--init-depth") && v) {
             g_init_depth = std::strtod(v, nullptr);

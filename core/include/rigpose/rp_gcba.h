@@ -90,8 +90,23 @@ typedef struct {
     rp_real rms_px;
 } rp_gcba_result_t;
 
+typedef enum {
+    RP_GCBA_IDLE = 0,   /* no adjustment under way: keyframes may be added */
+    RP_GCBA_STARTED,    /* landmarks grouped and triangulated; normal equations not built */
+    RP_GCBA_ITERATING,  /* equations built, Gauss-Newton steps to take */
+    RP_GCBA_SOLVED      /* converged or out of iterations: rp_gcba_finish reports */
+} rp_gcba_state_t;
+
 typedef struct {
     rp_gcba_kf_t kf[RP_GCBA_MAX_KF]; /* ring */
+    rp_gcba_state_t state;
+    /* the adjustment under way (rp_gcba_start .. rp_gcba_finish) */
+    const rp_rig_t *rig;
+    rp_gcba_cfg_t cfg;
+    rp_gcba_result_t res;
+    double cost, sq;                 /* robust cost, sum of squared residuals (px^2) */
+    uint16_t n_obs;
+    uint8_t it;
     uint8_t cap;                     /* ring size (rp_gcba_reset), 3..RP_GCBA_MAX_KF */
     uint8_t n_kf;                    /* keyframes held */
     uint8_t head;                    /* index of the oldest */
@@ -130,12 +145,24 @@ rp_status_t rp_gcba_add_keyframe(rp_gcba_t *ba, const rp_real p[6], const rp_gcb
                                  uint16_t n);
 
 /* Adjust the window with rig (metres) starting from the keyframe poses divided by mu, and
- * report the map's unit it implies. The window is left as it was. RP_OK; RP_E_ARG (NULL, bad
- * cfg, mu not > 0); RP_E_TOO_FEW (fewer than 3 keyframes or than 12 usable landmarks);
- * RP_E_DEGENERATE (the keyframes' translations span nothing); RP_E_SINGULAR (the reduced normal
- * matrix is not positive definite); RP_E_NAN. */
+ * report the map's unit it implies. The stored keyframes are left as they were (the solution:
+ * rp_gcba_solved_pose, rp_gcba_landmark). RP_OK; RP_E_ARG (NULL, bad cfg, mu not > 0);
+ * RP_E_TOO_FEW (fewer than 3 keyframes or than 12 usable landmarks); RP_E_DEGENERATE (the
+ * keyframes' translations span nothing); RP_E_SINGULAR (the reduced normal matrix is not
+ * positive definite); RP_E_NAN. rig must stay valid until it returns. */
 rp_status_t rp_gcba_scale(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
                           const rp_gcba_cfg_t *cfg, rp_gcba_result_t *res);
+
+/* The same in pieces, so that a caller can spread one adjustment over several frames:
+ * rp_gcba_start (grouping, triangulation), then rp_gcba_step (the first normal equations, then
+ * one Gauss-Newton step per call, each about one pass over the observations; a no-op once
+ * solved), then rp_gcba_finish (any steps left, and the result). While an adjustment is under
+ * way rp_gcba_add_keyframe refuses (RP_E_ARG); rig must stay valid until finish (cfg is copied).
+ * Statuses as rp_gcba_scale's; a failed start or step leaves the window idle. */
+rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
+                          const rp_gcba_cfg_t *cfg);
+rp_status_t rp_gcba_step(rp_gcba_t *ba);
+rp_status_t rp_gcba_finish(rp_gcba_t *ba, rp_gcba_result_t *res);
 
 /* Keyframe k of the window (0 = the oldest): its pose as stored (rp_gcba_add_keyframe or
  * rp_gcba_set_pose), or as the last rp_gcba_scale solved it (metres). RP_E_ARG: k out of range. */
