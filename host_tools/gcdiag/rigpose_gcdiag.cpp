@@ -261,6 +261,26 @@ double epi_scale(const rp_rig_t &rig, const std::map<uint32_t, View> &first,
 
 /* Feature-level gc (rp_sim_frame's features) on the same runs, keeping only a fraction keep of
  * the point ids (a fixed pseudo-random subset), with cfg's min_tracked. */
+/* The single factor s that best maps the estimated translations onto the true ones (least
+ * squares over frames; n rows of `stride` values, translation first), and the mean tx error
+ * it leaves (*tx_left). */
+double best_scale(const double *est, const double *truth, size_t stride, size_t n, double *tx_left)
+{
+    double num = 0.0, den = 0.0, res = 0.0;
+    for (size_t j = 0; j < n; ++j) {
+        for (size_t q = 0; q < 3; ++q) {
+            num += est[j * stride + q] * truth[j * stride + q];
+            den += est[j * stride + q] * est[j * stride + q];
+        }
+    }
+    const double s = den > 0.0 ? num / den : 1.0;
+    for (size_t j = 0; j < n; ++j) {
+        res += std::fabs(s * est[j * stride] - truth[j * stride]);
+    }
+    *tx_left = n > 0 ? res / (double)n : 0.0;
+    return s;
+}
+
 void sim_mode(uint64_t seed, uint32_t first_run, uint32_t runs, uint32_t frames, double keep,
               int min_tracked)
 {
@@ -328,7 +348,10 @@ void sim_mode(uint64_t seed, uint32_t first_run, uint32_t runs, uint32_t frames,
                 sum.add(est.p, &sr.truth[6u * j], st);
             }
         }
-        std::printf("run %u: features tx %.6f\n", r, one.err[0] / (double)one.frames);
+        double res = 0.0;
+        const double sbest = best_scale(&pe[6], &pt[6], 6, frames - 1, &res);
+        std::printf("run %u: features tx %.6f; best global scale %.4f leaves tx %.6f\n", r,
+                    one.err[0] / (double)one.frames, sbest, res);
         rp_sim_run_free(&sr);
     }
     std::printf("  feature level, keep %.2f of the points, %.1f features per frame set\n", keep,
@@ -389,17 +412,10 @@ void surface_sim_mode(const rpr::SeqCfg &base, uint32_t first, uint32_t runs, do
                 }
             }
         }
-        double num = 0.0, den = 0.0, res = 0.0;
-        for (size_t i = 0; i < te.size(); ++i) {
-            num += te[i] * tt[i];
-            den += te[i] * te[i];
-        }
-        const double sbest = den > 0.0 ? num / den : 1.0;
-        for (size_t i = 0; i < te.size(); i += 3) {
-            res += std::fabs(sbest * te[i] - tt[i]);
-        }
+        double res = 0.0;
+        const double sbest = best_scale(te.data(), tt.data(), 3, te.size() / 3, &res);
         std::printf("run %u: surface features tx %.6f; best global scale %.4f leaves tx %.6f\n", r,
-                    one.err[0] / (double)one.frames, sbest, res / (double)(te.size() / 3));
+                    one.err[0] / (double)one.frames, sbest, res);
         std::fflush(stdout);
     }
     std::printf("  feature level on the rendered surface (shell mix %.2f)\n", shell_mix);
