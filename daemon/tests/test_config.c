@@ -147,6 +147,20 @@ static void test_tracker_reset_share(void **state)
     assert_int_equal(g_cfg.track.reset_q8, 0);
 }
 
+/* estimator.metric_scale_sigma sets gc's metric scale step (0 turns it off). */
+static void test_gc_metric_scale_sigma(void **state)
+{
+    (void)state;
+    assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  metric_scale_sigma: 0")),
+                     RP_CFG_OK);
+    assert_near(g_cfg.gc.mscale_sigma, 0.0, 0.0);
+    assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  metric_scale_sigma: 0.1")),
+                     RP_CFG_OK);
+    assert_near(g_cfg.gc.mscale_sigma, 0.1, RP_TOL_TIGHT);
+    assert_int_equal(parse(edited(23, "  pairs: [[left, right]]")), RP_CFG_OK);
+    assert_near(g_cfg.gc.mscale_sigma, 0.3, RP_TOL_TIGHT);
+}
+
 /* `angles` is the paper's R = Rz(gamma) Ry(beta) Rx(alpha). */
 static void test_angles_match_the_rotation_module(void **state)
 {
@@ -221,6 +235,8 @@ static const bad_case_t bad[] = {
      "bad.yaml:24: estimator.sigma_px: 0 is outside (0, 100]"},
     {23, "  pairs: [[left, right]]\n  min_depth_m: 5\n  max_depth_m: 2", RP_CFG_E_RANGE,
      "bad.yaml:25: estimator.max_depth_m: must be larger"},
+    {23, "  pairs: [[left, right]]\n  metric_scale_sigma: -1", RP_CFG_E_RANGE,
+     "bad.yaml:24: estimator.metric_scale_sigma: -1 is outside"},
     {25, "  pose_channel: ''", RP_CFG_E_RANGE, "bad.yaml:25: lcm.pose_channel: must not be empty"},
     {25, "  status_every: 0", RP_CFG_E_RANGE, "bad.yaml:25: lcm.status_every: 0 is outside"},
     {25, "  pose_channel: P\ntracker:\n  reset_share: 1.5", RP_CFG_E_RANGE,
@@ -360,6 +376,7 @@ int main(void)
         cmocka_unit_test(test_embedded_default_is_the_simulated_rig),
         cmocka_unit_test(test_angles_match_the_rotation_module),
         cmocka_unit_test(test_tracker_reset_share),
+        cmocka_unit_test(test_gc_metric_scale_sigma),
         cmocka_unit_test(test_each_bad_file_names_line_and_key),
         cmocka_unit_test(test_whole_file_errors),
         cmocka_unit_test(test_replay_index_is_relative_to_the_file),

@@ -632,11 +632,12 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         "method",      "pairs",        "cams",          "sigma_px",         "q_trans",
         "q_rot",       "gate_chi2",    "iterations",    "min_features",     "min_tracked",
         "max_epipolar_px", "min_depth_m", "max_depth_m", "max_reproj_px",   "refine_structure",
-        "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s", NULL};
+        "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s",
+        "metric_scale_sigma", NULL};
     const char *P = "estimator";
     yaml_node_t *m;
     char method[16];
-    double sigma, qt, qr, gate, epi, dmin, dmax, reproj, idep, isig, dt;
+    double sigma, qt, qr, gate, epi, dmin, dmax, reproj, idep, isig, dt, msig;
     long long iters, minf, mint;
     uint8_t refine, sphere;
     if (get_map(c, root, "", "estimator", 1, &m) || check_keys(c, m, P, known) ||
@@ -656,7 +657,8 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         get_num(c, m, P, "init_depth_m", 0, 0.8335, 0.0, 1, 1e4, &idep) ||
         get_num(c, m, P, "init_depth_sigma_m", 0, 0.15, 0.0, 1, 1e4, &isig) ||
         get_bool(c, m, P, "init_on_sphere", 1, &sphere) ||
-        get_num(c, m, P, "default_dt_s", 0, 1.0 / 30.0, 0.0, 1, 10.0, &dt)) {
+        get_num(c, m, P, "default_dt_s", 0, 1.0 / 30.0, 0.0, 1, 10.0, &dt) ||
+        get_num(c, m, P, "metric_scale_sigma", 0, 0.3, 0.0, 0, 10.0, &msig)) {
         return -1;
     }
     int mi = -1;
@@ -702,6 +704,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     gc->init_depth_sigma_m = (rp_real)isig;
     gc->init_on_sphere = sphere;
     gc->default_dt_s = (rp_real)dt;
+    gc->mscale_sigma = (rp_real)msig;
 
     for (int k = 0; k < 4; ++k) {
         rp_vo_mono_cfg_t *mo = &cfg->mono[k];
