@@ -158,8 +158,7 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
  * covariance sigma_z^2 d d^T along the ray d = (xn, 1) plus an isotropic across-ray part from
  * the pixel noise and the pose uncertainty (Ppp, 6x6 row-major, may be NULL). */
 static rp_status_t init_feature(const rp_vo_gc_t *vo, uint8_t cam, const rp_real uv[2],
-                                const rp_pose_lin_t *pl, const rp_real *Ppp, rp_real depth_m,
-                                rp_point3_t *pt)
+                                const rp_pose_lin_t *pl, const rp_real *Ppp, rp_point3_t *pt)
 {
     const rp_rig_cam_t *rc = &vo->rig_m.cam[cam];
     rp_real xn[2];
@@ -170,7 +169,7 @@ static rp_status_t init_feature(const rp_vo_gc_t *vo, uint8_t cam, const rp_real
     const rp_real d[3] = {xn[0], xn[1], RP_C(1.0)};
     const rp_real dn = rp_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     /* on the plane z = depth, or on the sphere of radius depth around the camera */
-    const rp_real depth = depth_m; /* in map units */
+    const rp_real depth = vo->cfg.init_depth_m * vo->mu; /* in map units */
     const rp_real z = vo->cfg.init_on_sphere ? depth / dn : depth;
     const rp_real P[3] = {z * d[0], z * d[1], z};
     const rp_real range = z * dn;
@@ -244,14 +243,13 @@ static uint16_t top_up_camera(rp_vo_gc_t *vo, const rp_frameset_t *fs, uint8_t c
                               const rp_pose_lin_t *pl, const rp_real *Ppp)
 {
     uint16_t added = 0;
-    const rp_real depth = vo->cfg.init_depth_m * vo->mu; /* map units */
     for (uint16_t f = 0; f < fs->n[cam]; ++f) {
         const rp_feat_t *ft = &fs->f[cam][f];
         if (ft->id == RP_VO_GC_EMPTY_ID || !rp_all_finite(ft->uv, 2) || lm_find(vo, ft->id)) {
             continue;
         }
         rp_point3_t pt;
-        if (init_feature(vo, cam, ft->uv, pl, Ppp, depth, &pt) != RP_OK) {
+        if (init_feature(vo, cam, ft->uv, pl, Ppp, &pt) != RP_OK) {
             continue;
         }
         if (lm_insert(vo, ft->id, cam, &pt) != RP_OK) {
@@ -534,9 +532,11 @@ static void change_mu(rp_vo_gc_t *vo, rp_real mu)
 }
 
 /* After an adjustment: the window's poses in map units (the oldest keyframe stays where it was,
- * the others follow the solution's motion from it at the new map unit) go back into the ring,
- * and the filter's pose becomes the newest keyframe's (this frame's), the map following it
- * rigidly so that every landmark keeps its place relative to the rig. */
+ * the others follow the solution's motion from it at the new map unit) go back into the ring;
+ * the correction T_c that takes the newest keyframe from the filter's pose to the solved one is
+ * applied to every landmark and to the filter's pose now (the adjustment was spread over the
+ * frames since that keyframe), so that the map keeps its place relative to the rig; then the
+ * adjusted landmarks take the solution's positions. */
 static void correct_pose(rp_vo_gc_t *vo)
 {
     const uint8_t nk = vo->ba.n_kf;
