@@ -3,6 +3,7 @@
  */
 #include <string.h>
 
+#include "priv/rp_inv3.h"
 #include "priv/rp_math.h"
 #include "rigpose/rp_camera.h"
 #include "rigpose/rp_gcba.h"
@@ -62,29 +63,7 @@ rp_status_t rp_gcba_add_keyframe(rp_gcba_t *ba, const rp_real p[6], const rp_gcb
 
 /* ---- small double helpers ---------------------------------------------------------------- */
 
-/* Inverse of a symmetric positive definite 3x3 (adjugate); 0 if not SPD. */
-static int inv3(const double A[9], double Ai[9])
-{
-    const double c00 = A[4] * A[8] - A[5] * A[7];
-    const double c01 = A[5] * A[6] - A[3] * A[8];
-    const double c02 = A[3] * A[7] - A[4] * A[6];
-    const double det = A[0] * c00 + A[1] * c01 + A[2] * c02;
-    const double m2 = A[0] * A[4] - A[1] * A[3];
-    if (!(A[0] > 0.0) || !(m2 > 0.0) || !(det > 0.0) || !(det < 1e300)) {
-        return 0;
-    }
-    const double id = 1.0 / det;
-    Ai[0] = c00 * id;
-    Ai[1] = (A[2] * A[7] - A[1] * A[8]) * id;
-    Ai[2] = (A[1] * A[5] - A[2] * A[4]) * id;
-    Ai[3] = c01 * id;
-    Ai[4] = (A[0] * A[8] - A[2] * A[6]) * id;
-    Ai[5] = (A[2] * A[3] - A[0] * A[5]) * id;
-    Ai[6] = c02 * id;
-    Ai[7] = (A[1] * A[6] - A[0] * A[7]) * id;
-    Ai[8] = m2 * id;
-    return 1;
-}
+RP_DEFINE_INV3_SPD(inv3, double)
 
 /* In-place Cholesky of the n x n row-major A (lower triangle read and written); 0 if not SPD. */
 static int chol(double *A, int n)
@@ -167,6 +146,12 @@ static int lm_index(rp_gcba_t *ba, uint32_t id, uint8_t cam, uint16_t *n_lm)
         }
     }
     return -1;
+}
+
+/* An observation of a camera of the rig with a finite pixel. */
+static int usable(const rp_gcba_obs_t *o, const rp_rig_t *rig)
+{
+    return o->cam < rig->n_cams && isfinite(o->uv[0]) && isfinite(o->uv[1]);
 }
 
 static void pose_real(const double x[6], rp_real p[6])
@@ -459,10 +444,7 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
         const rp_gcba_kf_t *kf = kf_at(ba, k);
         for (uint16_t i = 0; i < kf->n; ++i) {
             const rp_gcba_obs_t *o = &kf->obs[i];
-            if (o->cam >= rig->n_cams || !(o->uv[0] == o->uv[0]) || !(o->uv[1] == o->uv[1])) {
-                continue;
-            }
-            const int L = lm_index(ba, o->id, o->cam, &n_lm);
+            const int L = usable(o, rig) ? lm_index(ba, o->id, o->cam, &n_lm) : -1;
             if (L >= 0) {
                 ba->lm_n[L]++;
             }
@@ -478,10 +460,7 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
         const rp_gcba_kf_t *kf = kf_at(ba, k);
         for (uint16_t i = 0; i < kf->n; ++i) {
             const rp_gcba_obs_t *o = &kf->obs[i];
-            if (o->cam >= rig->n_cams || !(o->uv[0] == o->uv[0]) || !(o->uv[1] == o->uv[1])) {
-                continue;
-            }
-            const int L = lm_index(ba, o->id, o->cam, &n_lm);
+            const int L = usable(o, rig) ? lm_index(ba, o->id, o->cam, &n_lm) : -1;
             if (L < 0) {
                 continue;
             }
@@ -490,17 +469,17 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
             ba->ob_i[j] = i;
         }
     }
-    uint16_t usable = 0;
+    uint16_t n_usable = 0;
     ba->n_lm_tab = n_lm;
     for (int L = 0; L < n_lm; ++L) {
         if (ba->lm_ok[L] && ba->lm_n[L] >= cfg->min_obs && ba->lm_n[L] <= RP_GCBA_MAX_KF &&
             triangulate(ba, rig, L, (double)cfg->min_angle)) {
-            usable++;
+            n_usable++;
         } else {
             ba->lm_ok[L] = 0;
         }
     }
-    if (usable < 12) {
+    if (n_usable < 12) {
         return RP_E_TOO_FEW;
     }
     ba->state = RP_GCBA_STARTED;

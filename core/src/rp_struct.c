@@ -3,6 +3,7 @@
  */
 #include <string.h>
 
+#include "priv/rp_inv3.h"
 #include "priv/rp_math.h"
 #include "rigpose/rp_struct.h"
 
@@ -24,29 +25,7 @@ static void pack(const rp_real C[9], rp_real c[6])
     c[5] = C[8];
 }
 
-/* Inverse of a symmetric positive definite 3x3 (adjugate); RP_E_SINGULAR if not SPD. */
-static rp_status_t inv3_spd(const rp_real A[9], rp_real Ai[9])
-{
-    const rp_real c00 = A[4] * A[8] - A[5] * A[7];
-    const rp_real c01 = A[5] * A[6] - A[3] * A[8];
-    const rp_real c02 = A[3] * A[7] - A[4] * A[6];
-    const rp_real det = A[0] * c00 + A[1] * c01 + A[2] * c02;
-    const rp_real minor2 = A[0] * A[4] - A[1] * A[3];
-    if (!(A[0] > RP_C(0.0)) || !(minor2 > RP_C(0.0)) || !(det > RP_C(0.0)) || !rp_finite(det)) {
-        return RP_E_SINGULAR;
-    }
-    const rp_real id = RP_C(1.0) / det;
-    Ai[0] = c00 * id;
-    Ai[1] = (A[2] * A[7] - A[1] * A[8]) * id;
-    Ai[2] = (A[1] * A[5] - A[2] * A[4]) * id;
-    Ai[3] = c01 * id;
-    Ai[4] = (A[0] * A[8] - A[2] * A[6]) * id;
-    Ai[5] = (A[2] * A[3] - A[0] * A[5]) * id;
-    Ai[6] = c02 * id;
-    Ai[7] = (A[1] * A[6] - A[0] * A[7]) * id;
-    Ai[8] = minor2 * id;
-    return RP_OK;
-}
+RP_DEFINE_INV3_SPD(inv3_spd, rp_real)
 
 rp_status_t rp_struct_init(rp_point3_t *pt, const rp_rig_t *rig, const uint8_t *cams,
                            uint8_t n, const rp_pose_lin_t *pl, const rp_real M[3],
@@ -72,7 +51,7 @@ rp_status_t rp_struct_init(rp_point3_t *pt, const rp_rig_t *rig, const uint8_t *
         }
     }
     rp_real C[9];
-    rp_status_t st = inv3_spd(info, C);
+    rp_status_t st = inv3_spd(info, C) ? RP_OK : RP_E_SINGULAR;
     if (st != RP_OK) {
         return st;
     }
