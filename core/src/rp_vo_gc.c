@@ -532,7 +532,8 @@ static void change_mu(rp_vo_gc_t *vo, rp_real mu)
 }
 
 /* After an adjustment: the window's poses in map units (the oldest keyframe stays where it was,
- * the others follow the solution's motion from it at the new map unit) go back into the ring;
+ * the others follow the solution's motion from it, converted at the map unit the window itself
+ * implies: the map keeps its own unit, the window only gives its shape) go back into the ring;
  * the correction T_c that takes the newest keyframe from the filter's pose to the solved one is
  * applied to every landmark and to the filter's pose now (the adjustment was spread over the
  * frames since that keyframe), so that the map keeps its place relative to the rig; then the
@@ -550,7 +551,7 @@ static void correct_pose(rp_vo_gc_t *vo)
             return;
         }
         for (int a = 0; a < 3; ++a) {
-            pk[a] = p0[a] + vo->mu * (sk[a] - s0[a]);
+            pk[a] = p0[a] + vo->ba_last.mu * (sk[a] - s0[a]);
             pk[3 + a] = sk[3 + a];
         }
         (void)rp_gcba_set_pose(&vo->ba, k, pk);
@@ -597,9 +598,9 @@ static void correct_pose(rp_vo_gc_t *vo)
             l->cam != cam) {
             continue;
         }
-        const rp_real m2 = vo->mu * vo->mu;
+        const rp_real m2 = vo->ba_last.mu * vo->ba_last.mu;
         for (int a = 0; a < 3; ++a) {
-            l->pt.M[a] = p0[a] + vo->mu * (X[a] - s0[a]);
+            l->pt.M[a] = p0[a] + vo->ba_last.mu * (X[a] - s0[a]);
         }
         for (int a = 0; a < 6; ++a) {
             l->pt.C[a] = m2 * C[a];
