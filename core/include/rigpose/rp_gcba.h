@@ -8,9 +8,9 @@
  * D_k: when the rig rotates, an offset camera moves by (R_j - R_i) D_k, which the map's unit
  * does not scale. That information lives in the joint problem (poses and landmarks free), not in
  * any one frame: for the paper's motion (0.005-0.02 rad per axis per frame, offsets 0.1 m,
- * 0.5 px) the Cramer-Rao bound of the scale over one run of 100 frames is 0.35 % with every
- * landmark free (40,000 observations), 1.3 % over a window of 10 keyframes 3 frames apart with
- * 60 landmarks per camera.
+ * 0.5 px) the Cramer-Rao bound of the scale over one run of 100 frames is 0.40 % with every
+ * landmark free (41,000 observations), 2.3 % over one of gc's windows (6 keyframes 4 frames
+ * apart, 80 landmarks per camera) (host_tools/gcdiag/scale_crlb.py).
  *
  * What: a ring of keyframes (the filter's pose in map units, and the pixels of a subset of its
  * landmarks). rp_gcba_scale() solves, in metres, for the poses of every keyframe but the oldest
@@ -21,9 +21,10 @@
  * p_k the filter's translations, t_k the solution's, with its variance from the reduced normal
  * matrix. The caller fuses it (rp_vo_gc: a scalar filter on mu).
  *
- * Arithmetic: the accumulators and the solve are double whatever rp_real is: the scale is the
- * normal matrix's weakest direction (eigenvalue ratios around 1e-7 here), below float's
- * resolution. Cortex-A53-class boards have double-precision hardware.
+ * Arithmetic: the accumulators and the solve are double whatever rp_real is (an exception to
+ * the one-scalar rule): the scale is the normal matrix's weakest direction, and the Schur
+ * complement subtracts large nearly equal numbers to find it. Cortex-A53-class boards have
+ * double-precision hardware; the pixels and Jacobians come from rp_rig_project in rp_real.
  */
 #ifndef RP_GCBA_H
 #define RP_GCBA_H
