@@ -5,25 +5,9 @@
 
 #include "priv/rp_inv3.h"
 #include "priv/rp_math.h"
+#include "priv/rp_sym3.h"
 #include "rigpose/rp_struct.h"
 
-/* full 3x3 from the packed symmetric form and back */
-static void unpack(const rp_real c[6], rp_real C[9])
-{
-    C[0] = c[0]; C[1] = c[1]; C[2] = c[2];
-    C[3] = c[1]; C[4] = c[3]; C[5] = c[4];
-    C[6] = c[2]; C[7] = c[4]; C[8] = c[5];
-}
-
-static void pack(const rp_real C[9], rp_real c[6])
-{
-    c[0] = C[0];
-    c[1] = RP_C(0.5) * (C[1] + C[3]);
-    c[2] = RP_C(0.5) * (C[2] + C[6]);
-    c[3] = C[4];
-    c[4] = RP_C(0.5) * (C[5] + C[7]);
-    c[5] = C[8];
-}
 
 RP_DEFINE_INV3_SPD(inv3_spd, rp_real)
 
@@ -60,7 +44,7 @@ rp_status_t rp_struct_init(rp_point3_t *pt, const rp_rig_t *rig, const uint8_t *
         C[i] *= s2;
     }
     memcpy(pt->M, M, sizeof(pt->M));
-    pack(C, pt->C);
+    rp_sym3_pack(C, pt->C);
     return RP_OK;
 }
 
@@ -79,7 +63,7 @@ rp_status_t rp_struct_update(rp_point3_t *pt, const rp_rig_t *rig, uint8_t cam,
     if (st != RP_OK) {
         return st;
     }
-    unpack(pt->C, C);
+    rp_sym3_unpack(pt->C, C);
     /* CJt = C J^T (3x2), S = J C J^T + s2 I (2x2) */
     rp_real CJt[6], S[4];
     for (int a = 0; a < 3; ++a) {
@@ -127,6 +111,6 @@ rp_status_t rp_struct_update(rp_point3_t *pt, const rp_rig_t *rig, uint8_t cam,
         return RP_E_SINGULAR;
     }
     memcpy(pt->M, Mn, sizeof(Mn));
-    pack(Cn, pt->C);
+    rp_sym3_pack(Cn, pt->C);
     return RP_OK;
 }

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "priv/rp_math.h"
+#include "priv/rp_sym3.h"
 #include "rigpose/rp_rot.h"
 #include "rigpose/rp_vo_gc.h"
 
@@ -225,12 +226,7 @@ static rp_status_t init_feature(const rp_vo_gc_t *vo, uint8_t cam, const rp_real
     if (st != RP_OK) {
         return st;
     }
-    pt->C[0] = Cw[0];
-    pt->C[1] = RP_C(0.5) * (Cw[1] + Cw[3]);
-    pt->C[2] = RP_C(0.5) * (Cw[2] + Cw[6]);
-    pt->C[3] = Cw[4];
-    pt->C[4] = RP_C(0.5) * (Cw[5] + Cw[7]);
-    pt->C[5] = Cw[8];
+    rp_sym3_pack(Cw, pt->C);
     if (!rp_all_finite(pt->M, 3) || !rp_all_finite(pt->C, 6)) {
         return RP_E_NAN;
     }
@@ -275,10 +271,7 @@ static rp_real proj_var_max(const rp_real *J, int n, const rp_real *C, int packe
 {
     rp_real Cf[36];
     if (packed3) {
-        const rp_real *c = C;
-        Cf[0] = c[0]; Cf[1] = c[1]; Cf[2] = c[2];
-        Cf[3] = c[1]; Cf[4] = c[3]; Cf[5] = c[4];
-        Cf[6] = c[2]; Cf[7] = c[4]; Cf[8] = c[5];
+        rp_sym3_unpack(C, Cf);
         C = Cf;
     }
     rp_real S[4];
@@ -575,18 +568,10 @@ static void correct_pose(rp_vo_gc_t *vo)
         for (int a = 0; a < 3; ++a) {
             pt->M[a] = M[a] + tc[a];
         }
-        const rp_real *c = pt->C;
-        C[0] = c[0]; C[1] = c[1]; C[2] = c[2];
-        C[3] = c[1]; C[4] = c[3]; C[5] = c[4];
-        C[6] = c[2]; C[7] = c[4]; C[8] = c[5];
+        rp_sym3_unpack(pt->C, C);
         rp_rot_mul(Rc, C, T);
         rp_rot_mul_a_bt(T, Rc, Cn);
-        pt->C[0] = Cn[0];
-        pt->C[1] = RP_C(0.5) * (Cn[1] + Cn[3]);
-        pt->C[2] = RP_C(0.5) * (Cn[2] + Cn[6]);
-        pt->C[3] = Cn[4];
-        pt->C[4] = RP_C(0.5) * (Cn[5] + Cn[7]);
-        pt->C[5] = Cn[8];
+        rp_sym3_pack(Cn, pt->C);
     }
     /* the adjusted landmarks replace the filter's, in map units */
     for (uint16_t i = 0; i < vo->ba.n_lm_tab; ++i) {
