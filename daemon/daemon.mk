@@ -9,11 +9,11 @@
 
 DMN := $(BUILD)/daemon
 DMN_LCM := $(BUILD)/lcmgen
-DMN_INC := -Icore/include -Iplatform/include -Ihost_tools/sim/lib -Idaemon -I$(DMN_LCM)/c
+DMN_INC := -Icore/include -Iplatform/include -Iplatform/sim -Idaemon -I$(DMN_LCM)/c
 DMN_WARN := $(WARN) -Wdouble-promotion -Wconversion -Wno-sign-conversion
 DMN_SRC := daemon/rigpose.c daemon/rp_est.c
 DMN_HDRS := $(wildcard core/include/rigpose/*.h platform/include/rigpose/*.h daemon/*.h \
-                       host_tools/sim/lib/*.h)
+                       platform/sim/*.h)
 # The platform's library (platform/platform.mk): the HAL sources, the sim source and the
 # configuration parser; HAL_LIBS is what it links (libyaml, libpng, libjpeg).
 DMN_HAL_LIB = $(BUILD)/platform/librigpose_hal.a
@@ -71,6 +71,7 @@ $(DMN)/run_test_lcm: daemon/tests/test_lcm.sh daemon/tests/lcm_sub.py
 
 DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est)
 HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm
+SERIAL_TESTS += $(DMN)/run_test_lcm
 test: $(DMN_TESTS) $(DMN)/run_test_lcm $(REL)/rigpose $(DMN_LCM)/stamp
 
 # ---- benchmark -----------------------------------------------------------------------------------

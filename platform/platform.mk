@@ -4,7 +4,7 @@
 #   $(BUILD)/platform/librigpose_hal.a       every platform/src/*.c (HAL sources, configuration),
 #                                            release flags (double, Eigen, -O2): for the daemon
 #   $(BUILD)/platform/san/librigpose_hal.a   the same under ASan+UBSan, for the host tests
-#   $(BUILD)/platform/tests/test_*           tests/platform/test_*.c (cmocka), run by make test
+#   $(BUILD)/platform/tests/test_*           tests/unit/platform/test_*.c (cmocka), run by make test
 #   $(BUILD)/vm/vivid_capture                static capture program run inside the VM
 #   $(BUILD)/vm/run_vivid_test               tests/vm/vivid_test.sh with this build's paths:
 #                                            boots a Debian kernel under qemu, loads vivid with
@@ -16,7 +16,7 @@
 PLAT := $(BUILD)/platform
 HAL_C := $(sort $(wildcard platform/src/*.c))
 HAL_H := $(wildcard platform/include/rigpose/*.h platform/src/*.h core/include/rigpose/*.h \
-                    host_tools/sim/lib/*.h)
+                    platform/sim/*.h)
 HAL_INC := -Iplatform/include $(INC)
 HAL_CFLAGS := $(CSTD) $(CORE_WARN) -Wno-format-truncation -D_DEFAULT_SOURCE $(HAL_INC) $(VDEF_double-eigen)
 HAL_LIBS := -lyaml -lpng -ljpeg -lz
@@ -35,8 +35,8 @@ $(HAL_SAN_LIB): $(patsubst platform/src/%.c,$(PLAT)/san/obj/%.o,$(HAL_C))
 	rm -f $@ && ar rcs $@ $^
 
 # Host tests: sanitised, double / Eigen core (the HAL has no numerics of its own).
-HAL_TESTS := $(patsubst tests/platform/%.c,$(PLAT)/tests/%,$(wildcard tests/platform/test_*.c))
-$(PLAT)/tests/%: tests/platform/%.c tests/rp_test.h $(HAL_SAN_LIB) \
+HAL_TESTS := $(patsubst tests/unit/platform/%.c,$(PLAT)/tests/%,$(wildcard tests/unit/platform/test_*.c))
+$(PLAT)/tests/%: tests/unit/platform/%.c tests/rp_test.h $(HAL_SAN_LIB) \
                  $(BUILD)/double-eigen/librigpose_sim.a $(BUILD)/double-eigen/librigpose_core.a
 	@mkdir -p $(@D)
 	$(CC) $(CSTD) $(WARN) -D_DEFAULT_SOURCE $(HAL_INC) -Itests -O1 -g $(SAN) \

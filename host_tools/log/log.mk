@@ -23,6 +23,7 @@ $(LOG_BIN): host_tools/log/rigpose_log.cpp $(LOG_HAL) $(LOG_LCM)/librigpose_lcm.
 
 EXTRA_TOOLS += $(LOG_BIN)
 HOST_EXTRA_TESTS += host_tools/log/test_log.sh
+SERIAL_TESTS += host_tools/log/test_log.sh
 test: $(LOG_BIN) $(REL)/rigpose $(REL)/rigpose-render $(REL)/rigpose-eval
 export RP_LOG_BIN = $(LOG_BIN)
 export RP_LOG_WORK = $(BUILD)/log/work

@@ -3,12 +3,12 @@
 # (double, Eigen): the library's rp_real must match it.
 #
 #   make $(REL)/rigpose-render        the program
-#   $(BUILD)/render/librp_render.a    the library (also used by host_tools/e2e)
+#   $(BUILD)/render/librp_render.a    the library (also used by host_tools/research/e2e)
 
 RENDER_DIR := $(BUILD)/render
 RENDER_LIB := $(RENDER_DIR)/librp_render.a
 RENDER_BIN := $(REL)/rigpose-render
-RENDER_HDR := $(wildcard host_tools/render/*.hpp core/include/rigpose/*.h host_tools/sim/lib/*.h)
+RENDER_HDR := $(wildcard host_tools/render/*.hpp core/include/rigpose/*.h platform/sim/*.h)
 
 # Recursively expanded: pkg-config runs when the recipe runs, after `deps` installed OpenCV.
 RENDER_CXXFLAGS = -std=c++14 -O2 -g -DNDEBUG -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EIGEN=1 $(WARN) \

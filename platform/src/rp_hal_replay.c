@@ -1,7 +1,7 @@
 /*
  * rp_hal_replay.c - the HAL's replay source: recorded or rendered frame sets from a folder.
  *
- * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/realdata):
+ * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/research/realdata):
  *   frames.csv  header `utime_us,cam0,cam1,...`, then one row per frame set: the capture time in
  *               microseconds (strictly increasing) and each column's image, a path relative to
  *               the folder (or absolute). Camera i reads the column named cfg.cam[i].device, or

@@ -7,8 +7,10 @@
 #
 #   tests/vm/vivid_test.sh VMDIR CAPTURE [DAEMON CONFIG]
 #
-# VMDIR    cache and work folder ($(BUILD)/vm): the kernel package (downloaded once with
-#          `apt-get download`, never installed), the unpacked kernel and media modules
+# VMDIR    work folder ($(BUILD)/vm): the initramfs and the guest's results
+# The kernel package (downloaded once with `apt-get download`, never installed) and the unpacked
+# kernel and media modules are cached in $RP_VM_CACHE (default ${XDG_CACHE_HOME:-~/.cache}/
+# rigpose/vm), which `make clean` does not remove.
 # CAPTURE  static vivid_capture (tests/vm/vivid_capture.c)
 # DAEMON   optional daemon, run as `DAEMON --config CONFIG --frames 15` in the guest after the
 #          capture; static, or dynamic with its shared libraries (from ldd) copied into the
@@ -39,16 +41,19 @@ mkdir -p "$VMDIR" || cant "cannot create $VMDIR"
 VMDIR=$(cd "$VMDIR" && pwd)
 
 # ---- kernel and modules, cached ----------------------------------------------------------------
-KDIR=$VMDIR/kernel
+CACHE=${RP_VM_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/rigpose/vm}
+mkdir -p "$CACHE" || cant "cannot create the cache folder $CACHE"
+KDIR=$CACHE/kernel
+exec 9>"$CACHE/.lock" && flock 9 || cant "cannot lock $CACHE/.lock"  # one preparer at a time
 if [ ! -f "$KDIR/ready" ]; then
   pkg=$(apt-cache depends linux-image-amd64 2>/dev/null | awk '/Depends: linux-image-[0-9]/{print $2; exit}')
   [ -n "$pkg" ] || cant "apt-cache names no linux-image-* for linux-image-amd64 (apt-get update?)"
-  deb=$(ls "$VMDIR"/"${pkg}"_*.deb 2>/dev/null | head -1)
+  deb=$(ls "$CACHE"/"${pkg}"_*.deb 2>/dev/null | head -1)
   if [ -z "$deb" ]; then
-    say "downloading $pkg (about 70 MB, once)"
-    (cd "$VMDIR" && apt-get download "$pkg" >/dev/null 2>&1) || cant "apt-get download $pkg failed"
-    deb=$(ls "$VMDIR"/"${pkg}"_*.deb 2>/dev/null | head -1)
-    [ -n "$deb" ] || cant "apt-get download $pkg left no .deb in $VMDIR"
+    say "downloading $pkg (about 70 MB, once, into $CACHE)"
+    (cd "$CACHE" && apt-get download "$pkg" >/dev/null 2>&1) || cant "apt-get download $pkg failed"
+    deb=$(ls "$CACHE"/"${pkg}"_*.deb 2>/dev/null | head -1)
+    [ -n "$deb" ] || cant "apt-get download $pkg left no .deb in $CACHE"
   fi
   say "unpacking $(basename "$deb")"
   rm -rf "$KDIR" && mkdir -p "$KDIR/root"
@@ -66,6 +71,7 @@ if [ ! -f "$KDIR/ready" ]; then
   echo "$KVER" > "$KDIR/kver"
   touch "$KDIR/ready"
 fi
+flock -u 9
 KVER=$(cat "$KDIR/kver")
 MODROOT=$KDIR/root/lib/modules/$KVER
 [ -f "$MODROOT/modules.dep" ] || cant "no modules.dep in $MODROOT"

@@ -10,7 +10,7 @@
  * any one frame: for the paper's motion (0.005-0.02 rad per axis per frame, offsets 0.1 m,
  * 0.5 px) the Cramer-Rao bound of the scale over one run of 100 frames is 0.40 % with every
  * landmark unknown (41,000 observations), 2.3 % over one of gc's windows (6 keyframes 4 frames
- * apart, 80 landmarks per camera); host_tools/gcdiag/scale_crlb.py computes both.
+ * apart, 80 landmarks per camera); host_tools/research/gcdiag/scale_crlb.py computes both.
  *
  * What: a ring of keyframes (the filter's pose in map units, and the pixels of a subset of its
  * landmarks). rp_gcba_scale() solves, in metres, for the poses of every keyframe but the oldest

@@ -9,7 +9,7 @@
  *   gradients   int16 Scharr ([3 10 3] x [-1 0 1]: 32x the derivative in grey levels / px)
  *   intensities interpolated in Q5 (grey level x 32) with Q7 bilinear weights, in int16 lanes;
  *               the sample points are rounded to 1/128 px and the estimate is corrected for it
- *               (results within about 0.001 px of OpenCV's Q14 weights, tests/oracle_track.cpp)
+ *               (results within about 0.001 px of OpenCV's Q14 weights, tests/integration/oracle_track.cpp)
  *   sums        int32 over chunks of at most 64 window pixels (|product| < 2^25), then int64
  *               (structure tensor, mismatch vector); detection responses int32
  * Speed: window rows are padded to multiples of 8 pixels and every inner loop runs over lane
@@ -27,6 +27,7 @@
 #define RP_TRACK_H
 
 #include "rp_frame.h"
+#include "rp_image.h"
 #include "rp_opts.h"
 #include "rp_status.h"
 
@@ -34,15 +35,6 @@
 extern "C" {
 #endif
 
-/* A caller-owned 8-bit grey image, row-major: pixel (u, v) is data[v * stride + u].
- * size is the number of readable bytes at data: an image is truncated (rejected) when
- * size < stride * (h - 1) + w. */
-typedef struct {
-    const uint8_t *data;
-    uint16_t w, h;   /* pixels */
-    uint32_t stride; /* bytes between rows, >= w */
-    uint32_t size;   /* readable bytes at data */
-} rp_image_t;
 
 typedef struct {
     uint8_t cam;         /* camera index 0..RP_MAX_CAMS-1; ids are cam + RP_MAX_CAMS * k */

@@ -21,7 +21,7 @@
 
 #include "rigpose/rp_frame.h"
 #include "rigpose/rp_opts.h"
-#include "rigpose/rp_track.h"
+#include "rigpose/rp_image.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,6 +1,6 @@
 /*
  * rp_hal_sim.h - the HAL's `sim` camera source: the feature-level simulation of the paper's
- * Table 1 protocol (host_tools/sim/lib/rp_sim.h), so the daemon runs with no hardware.
+ * Table 1 protocol (platform/sim/rp_sim.h), so the daemon runs with no hardware.
  *
  * Each grab delivers one frame set of the simulated run: no images (every camera's img.data is
  * NULL), the tracked features of all six cameras in set->feats (has_feats = 1; feats->utime is

@@ -19,7 +19,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "rigpose/rp_track.h"
-#include "../host_tools/common/rp_cv.hpp"
+#include "../../host_tools/common/rp_cv.hpp"
 
 static int n_pass = 0, n_fail = 0;
 

@@ -1,4 +1,4 @@
-# host_tools/realdata/realdata.mk - rigpose-realdata: rigpose's stereo layout on real camera data
+# host_tools/research/realdata/realdata.mk - rigpose-realdata: rigpose's stereo layout on real camera data
 # (KITTI 00, EuRoC MH01 in ../shared/data; included by the top-level Makefile).
 #
 #   make $(REL)/rigpose-realdata   the program
@@ -23,29 +23,29 @@ $(eval $(call CORE_LIB,realdata,$(RD_DIR),$(CC),$(CXX),-O2 -g -DNDEBUG $(RD_DEFS
 
 # Recursively expanded: pkg-config runs when the recipe runs, after `deps` installed OpenCV.
 RD_CXXFLAGS = -std=c++17 -O2 -g -DNDEBUG $(RD_DEFS) $(WARN) \
-    $(patsubst -I%,-isystem %,$(shell pkg-config --cflags opencv4)) $(INC) -Ihost_tools/realdata
+    $(patsubst -I%,-isystem %,$(shell pkg-config --cflags opencv4)) $(INC) -Ihost_tools/research/realdata
 RD_LIBS = -lopencv_calib3d -lopencv_video -lopencv_imgproc -lopencv_imgcodecs -lopencv_core -lm
-RD_SRC := host_tools/realdata/rigpose_realdata.cpp host_tools/realdata/rp_realdata.cpp \
-    host_tools/realdata/rp_direct.cpp
-RD_HDR := $(wildcard host_tools/realdata/*.hpp core/include/rigpose/*.h)
+RD_SRC := host_tools/research/realdata/rigpose_realdata.cpp host_tools/research/realdata/rp_realdata.cpp \
+    host_tools/research/realdata/rp_direct.cpp
+RD_HDR := $(wildcard host_tools/research/realdata/*.hpp core/include/rigpose/*.h)
 
 $(RD_BIN): $(RD_SRC) $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
 	mkdir -p $(REL)
 	$(CXX) $(RD_CXXFLAGS) $(RD_SRC) $(RD_DIR)/librigpose_core.a -o $@ $(RD_LIBS)
 
-EXTRA_TOOLS += $(RD_BIN)
+RESEARCH_TOOLS += $(RD_BIN)
 
 # The data: ../shared/data beside the repository, or $RIGPOSE_DATA.
 RD_DATA = $(or $(RIGPOSE_DATA),$(abspath $(CURDIR)/../shared/data))
 
-# Conversions, scoring and loaders (host_tools/realdata/test_realdata_conv.cpp).
+# Conversions, scoring and loaders (host_tools/research/realdata/test_realdata_conv.cpp).
 RD_TEST := $(RD_DIR)/test_realdata_conv
-$(RD_TEST): host_tools/realdata/test_realdata_conv.cpp host_tools/realdata/rp_realdata.cpp \
-            host_tools/realdata/rp_direct.cpp $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
-	$(CXX) $(RD_CXXFLAGS) $< host_tools/realdata/rp_realdata.cpp host_tools/realdata/rp_direct.cpp \
+$(RD_TEST): host_tools/research/realdata/test_realdata_conv.cpp host_tools/research/realdata/rp_realdata.cpp \
+            host_tools/research/realdata/rp_direct.cpp $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
+	$(CXX) $(RD_CXXFLAGS) $< host_tools/research/realdata/rp_realdata.cpp host_tools/research/realdata/rp_direct.cpp \
 	    $(RD_DIR)/librigpose_core.a -o $@ $(RD_LIBS)
 
-HOST_EXTRA_TESTS += $(RD_TEST) host_tools/realdata/test_realdata.sh
+HOST_EXTRA_TESTS += $(RD_TEST) host_tools/research/realdata/test_realdata.sh
 test: $(RD_BIN) $(RD_TEST)
 export RP_REALDATA_BIN = $(RD_BIN)
 
@@ -62,7 +62,7 @@ $(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
 	      --opencv-ref --direct-ref --name kitti00_from14 --json-out $(RD_DIR)/kitti00_from14.json && \
 	  $(RD_BIN) --euroc $(RD_DATA)/euroc_mh01_000-149 --frames $(RD_BENCH_EUROC) --quiet \
 	      --json-out $(RD_DIR)/euroc_mh01.json && \
-	  $(PY) host_tools/bench/merge_json.py $@ $(RD_DIR)/kitti00.json \
+	  $(PY) host_tools/research/bench/merge_json.py $@ $(RD_DIR)/kitti00.json \
 	      $(RD_DIR)/kitti00_from14.json $(RD_DIR)/euroc_mh01.json; \
 	else echo "realdata: no data in $(RD_DATA) (set RIGPOSE_DATA): figures left out"; \
 	  echo '{}' > $@; fi

@@ -178,7 +178,8 @@ int main()
         const bool refused = !rprd::load_kitti(data + "/euroc_mh01_000-149", 0, 0, &bad, &err);
         check(refused && !err.empty(), ("a wrong folder is refused: " + err).c_str(), 0.0);
     } else {
-        std::printf("test_realdata_conv: loaders not checked: no data in %s (RIGPOSE_DATA)\n",
+        std::printf("[  SKIPPED ] 1 test(s): the loaders on real data: no kitti00_000-099/ and "
+                    "euroc_mh01_000-149/ in %s (set RIGPOSE_DATA)\n",
                     data.c_str());
     }
     std::printf("[  PASSED  ] %d test(s).\n", n_pass);

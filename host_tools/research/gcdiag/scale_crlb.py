@@ -16,7 +16,7 @@ least-squares scale of the translations (g) and the poses' covariance C.
       one window of W frames, keyframes every K frames, N landmarks per camera (rp_gcba's case)
 
 Prints the scale's standard deviation in percent. numpy (PyPI, installed into .venv by
-scripts/install-deps.sh). Not a test; the figures are quoted in host_tools/gcdiag/README.md.
+scripts/install-deps.sh). Not a test; the figures are quoted in host_tools/research/gcdiag/README.md.
 """
 import argparse
 

@@ -34,7 +34,7 @@
 
 #include "bt_scene.h"
 #include "rigpose/rp_track.h"
-#include "../common/rp_cv.hpp"
+#include "../../common/rp_cv.hpp"
 
 namespace {
 

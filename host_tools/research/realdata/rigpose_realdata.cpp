@@ -37,7 +37,7 @@
 #include "rigpose/rp_pipe.h"
 #include "rp_direct.hpp"
 #include "rp_realdata.hpp"
-#include "../common/rp_cv.hpp"
+#include "../../common/rp_cv.hpp"
 
 namespace fs = std::filesystem;
 

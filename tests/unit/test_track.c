@@ -17,7 +17,7 @@
 #define rp_track_init rp_track_init_scalar
 #define rp_track_process rp_track_process_scalar
 #define rp_pyr_build rp_pyr_build_scalar
-#include "../core/src/rp_track.c"
+#include "../../core/src/frontend/rp_track.c"
 #undef rp_track_default_cfg
 #undef rp_track_init
 #undef rp_track_process

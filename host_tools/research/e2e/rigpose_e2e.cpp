@@ -11,7 +11,7 @@
  * estimator configuration fed rigpose-sim's simulated features (rp_sim_frame: 10,000 shell
  * points, 0.5 px noise) along the same trajectories, and the ratio pixel / feature; and the
  * same feature model with the 10,000 points on the rendered surface (rpr::surface_features):
- * the scene's own depths, which set gc's metric scale (host_tools/gcdiag/README.md). With
+ * the scene's own depths, which set gc's metric scale (host_tools/research/gcdiag/README.md). With
  * --points the scene is the feature-level simulation's own (its depths too), so the surface row
  * would repeat the sim row and is left out.
  *

@@ -1,25 +1,25 @@
-# host_tools/e2e/e2e.mk - rigpose-e2e: rendered pixels -> the core's image pipeline -> poses,
+# host_tools/research/e2e/e2e.mk - rigpose-e2e: rendered pixels -> the core's image pipeline -> poses,
 # scored like rigpose-sim (included by the top-level Makefile; this file is read before
 # host_tools/render/render.mk, so the render library's path is spelled out here).
 #
 #   make $(REL)/rigpose-e2e     the program
-#   make test                   runs host_tools/e2e/test_e2e.sh (a short run, loose bounds)
+#   make test                   runs host_tools/research/e2e/test_e2e.sh (a short run, loose bounds)
 #   make bench                  $(BUILD)/bench/render.json (render_stereo4_tx_m, render_gc_tx_m)
 #                               and render_points.json (the same on the points scene)
 
 E2E_BIN := $(REL)/rigpose-e2e
 E2E_RENDER_LIB := $(BUILD)/render/librp_render.a
-E2E_DEPS := host_tools/e2e/rigpose_e2e.cpp $(E2E_RENDER_LIB) $(REL)/librigpose_sim.a \
+E2E_DEPS := host_tools/research/e2e/rigpose_e2e.cpp $(E2E_RENDER_LIB) $(REL)/librigpose_sim.a \
     $(REL)/librigpose_core.a $(wildcard host_tools/render/*.hpp core/include/rigpose/*.h)
 
 $(E2E_BIN): $(E2E_DEPS)
 	$(CXX) $(RENDER_CXXFLAGS) $< $(E2E_RENDER_LIB) $(REL)/librigpose_sim.a \
 	    $(REL)/librigpose_core.a -o $@ $(RENDER_LIBS)
 
-EXTRA_TOOLS += $(E2E_BIN)
+RESEARCH_TOOLS += $(E2E_BIN)
 
 # make test: 320x240, 25 frames, one run, stereo4 and gc with loose bounds on the mean tx error.
-HOST_EXTRA_TESTS += host_tools/e2e/test_e2e.sh
+HOST_EXTRA_TESTS += host_tools/research/e2e/test_e2e.sh
 test: $(E2E_BIN)
 export RP_E2E_BIN = $(E2E_BIN)
 
