@@ -5,9 +5,9 @@
  *
  * Each frame set from the configured source becomes one rigpose.pose_t on the pose channel;
  * a rigpose.status_t goes out every lcm.status_every sets and whenever a camera changes state.
- * Sources that deliver images (v4l2, replay) go through the core's image pipeline (rp_pipe.h);
- * the sim source delivers features, which go to the same pipeline's estimator directly
- * (rp_est.h). With a source that knows the truth (sim), every printed pose carries its error
+ * Every source goes through the HAL's rp_hal_open / rp_hal_grab. Sets of images (v4l2, replay)
+ * go through the core's image pipeline (rp_pipe.h); sets of features (sim) go to the same
+ * pipeline's estimator directly (rp_est.h). With a source that knows the truth (sim), every printed pose carries its error
  * against it, and the run ends with the mean absolute error per axis (as Table 1 of the paper
  * reports it).
  *
@@ -73,46 +73,43 @@ static void on_signal(int sig)
 static const char *method_name(const rp_config_t *cfg) { return rp_method_name(cfg->method); }
 static int8_t method_code(const rp_config_t *cfg) { return (int8_t)cfg->method; }
 
-/* ---- the camera source: the sim directly, the others through the platform's rp_hal_open ---- */
+/* ---- the camera source: every kind through the HAL ------------------------------------------- */
 
-typedef struct {
-    rp_hal_sim_t *sim;
-    rp_hal_source_t *hal;
-} source_t;
-
-static rp_hal_status_t source_open(source_t *s, const rp_config_t *cfg)
+/* Open and start cfg's source; the sim's options (noise, a vanishing camera) from cfg->sim.
+ * On failure the message names the source and what went wrong; *src is NULL. */
+static rp_hal_status_t source_open(const rp_config_t *cfg, rp_hal_source_t **src)
 {
-    memset(s, 0, sizeof *s);
-    if (cfg->hal.kind == RP_HAL_SRC_SIM) {
-        rp_hal_sim_opts_t so = rp_hal_sim_default_opts();
+    static rp_hal_sim_opts_t so; /* read by rp_hal_open only */
+    rp_hal_cfg_t hc = cfg->hal;
+    if (hc.kind == RP_HAL_SRC_SIM) {
+        so = rp_hal_sim_default_opts();
         so.noise_px = cfg->sim.noise_px;
         so.drop_cam = cfg->sim.drop_cam;
         so.drop_from = cfg->sim.drop_from;
-        return rp_hal_sim_open(&s->sim, &cfg->hal, &so);
+        hc.sim_opts = &so;
     }
-    return rp_hal_open(&s->hal, &cfg->hal);
-}
-
-static rp_hal_status_t source_start(source_t *s)
-{
-    return s->sim != NULL ? rp_hal_sim_start(s->sim) : rp_hal_start(s->hal);
-}
-
-static rp_hal_status_t source_grab(source_t *s, rp_hal_set_t *set)
-{
-    return s->sim != NULL ? rp_hal_sim_grab(s->sim, set) : rp_hal_grab(s->hal, set);
-}
-
-static void source_close(source_t *s)
-{
-    if (s->sim != NULL) {
-        (void)rp_hal_sim_stop(s->sim);
-        rp_hal_sim_close(s->sim);
-    } else if (s->hal != NULL) {
-        (void)rp_hal_stop(s->hal);
-        rp_hal_close(s->hal);
+    rp_hal_status_t st = rp_hal_open(src, &hc);
+    if (st != RP_HAL_OK) {
+        fprintf(stderr, "rigpose: %s: camera source: %s: %s\n", cfg->path,
+                rp_hal_status_str(st), rp_hal_errmsg(NULL));
+        return st;
     }
-    memset(s, 0, sizeof *s);
+    st = rp_hal_start(*src);
+    if (st != RP_HAL_OK) {
+        fprintf(stderr, "rigpose: %s: camera source: %s: %s\n", cfg->path,
+                rp_hal_status_str(st), rp_hal_errmsg(*src));
+        rp_hal_close(*src);
+        *src = NULL;
+    }
+    return st;
+}
+
+static void source_close(rp_hal_source_t *src)
+{
+    if (src != NULL) {
+        (void)rp_hal_stop(src);
+        rp_hal_close(src);
+    }
 }
 
 /* ---- the estimator: features directly, images through the pipeline --------------------------- */
@@ -121,7 +118,7 @@ static void source_close(source_t *s)
 static rp_status_t estimator_step(const rp_hal_set_t *set, rp_estimate_t *est,
                                   const rp_frameset_t **fs_out)
 {
-    if (set->has_feats && set->feats != NULL) {
+    if (set->payload == RP_HAL_PAYLOAD_FEATS) {
         *fs_out = set->feats;
         return rp_est_step(&g_est, set->feats, est);
     }
@@ -240,7 +237,7 @@ static void publish_status(lcm_t *lcm, const rigpose_status_t *m)
 
 /* Grab, estimate, publish until --frames, the source's end, a signal or the source failing for
  * good. Returns the exit code. */
-static int run(const rp_args_t *o, source_t *src, lcm_t *lcm)
+static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
 {
     rp_estimate_t est;
     memset(&est, 0, sizeof est);
@@ -249,14 +246,15 @@ static int run(const rp_args_t *o, source_t *src, lcm_t *lcm)
     while (!g_stop && (o->frames == 0 || g_stats.n_sets < o->frames)) {
         const int32_t seq = (int32_t)g_stats.n_sets;
         const int64_t t_ask = rp_hal_now_us();
-        const rp_hal_status_t hst = source_grab(src, &g_set);
+        const rp_hal_status_t hst = rp_hal_grab(src, &g_set);
         if (hst == RP_HAL_E_END) {
             break;
         }
         const int64_t t_grab = rp_hal_now_us();
         if (hst != RP_HAL_OK) {
             if (hst != RP_HAL_E_TIMEOUT && ++grab_errors > MAX_GRAB_ERRORS) {
-                fprintf(stderr, "rigpose: camera source failed: %s\n", rp_hal_status_str(hst));
+                fprintf(stderr, "rigpose: camera source failed: %s: %s\n", rp_hal_status_str(hst),
+                        rp_hal_errmsg(src));
                 return EXIT_SOURCE_FAILED;
             }
             /* Tell listeners which cameras are missing; keep going (devices are retried). */
@@ -361,14 +359,8 @@ int main(int argc, char **argv)
         return EXIT_LCM;
     }
 
-    source_t src;
-    rp_hal_status_t hst = source_open(&src, &g_cfg);
-    if (hst == RP_HAL_OK) {
-        hst = source_start(&src);
-    }
-    if (hst != RP_HAL_OK) {
-        fprintf(stderr, "rigpose: camera source: %s\n", rp_hal_status_str(hst));
-        source_close(&src);
+    rp_hal_source_t *src = NULL;
+    if (source_open(&g_cfg, &src) != RP_HAL_OK) {
         lcm_destroy(lcm);
         return EXIT_SOURCE;
     }
@@ -391,9 +383,9 @@ int main(int argc, char **argv)
 
     (void)rp_stats_init(&g_stats, g_cfg.hal.kind, method_code(&g_cfg), g_cfg.rig.n_cams,
                         rp_hal_now_us());
-    const int exit_code = run(&o, &src, lcm);
+    const int exit_code = run(&o, src, lcm);
 
-    source_close(&src);
+    source_close(src);
     lcm_destroy(lcm);
     (void)print_summary(&g_stats, g_cfg.pose_channel, o.stats_json);
     return exit_code;
