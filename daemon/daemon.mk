@@ -69,6 +69,12 @@ $(DMN)/$(1)/test_args: daemon/tests/test_args.c daemon/rp_args.c platform/src/rp
 	    daemon/tests/test_args.c daemon/rp_args.c platform/src/rp_config.c \
 	    $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a \
 	    -o $$@ $(SAN) -lyaml -lcmocka -lstdc++ -lm
+$(DMN)/$(1)/test_stats: daemon/tests/test_stats.c daemon/rp_stats.c $(DMN_HDRS) tests/rp_test.h \
+                        $(DMN_LCM)/stamp $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a
+	@mkdir -p $$(dir $$@)
+	$(CC) $(CSTD) $(WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) \
+	    daemon/tests/test_stats.c daemon/rp_stats.c $(BUILD)/$(1)/librigpose_sim.a \
+	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) -lcmocka -lstdc++ -lm
 # The publish path under an allocation counter: malloc, calloc, realloc and free wrapped.
 $(DMN)/$(1)/test_publish: daemon/tests/test_publish.c daemon/rp_publish.c daemon/rp_stats.c \
                           $(DMN_HDRS) tests/rp_test.h $(DMN_LCM)/librigpose_lcm.a \
@@ -89,7 +95,8 @@ $(DMN)/run_test_lcm: daemon/tests/test_lcm.sh daemon/tests/lcm_sub.py
 	chmod +x $@
 
 DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est \
-                                     $(DMN)/$(v)/test_args $(DMN)/$(v)/test_publish)
+                                     $(DMN)/$(v)/test_args $(DMN)/$(v)/test_publish \
+                                     $(DMN)/$(v)/test_stats)
 HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm
 test: $(DMN_TESTS) $(DMN)/run_test_lcm $(REL)/rigpose $(DMN_LCM)/stamp
 
