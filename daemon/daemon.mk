@@ -11,7 +11,7 @@ DMN := $(BUILD)/daemon
 DMN_LCM := $(BUILD)/lcmgen
 DMN_INC := -Icore/include -Iplatform/include -Iplatform/sim -Idaemon -I$(DMN_LCM)/c
 DMN_WARN := $(WARN) -Wdouble-promotion -Wconversion -Wno-sign-conversion
-DMN_SRC := daemon/rigpose.c daemon/rp_est.c
+DMN_SRC := daemon/rigpose.c daemon/rp_args.c daemon/rp_est.c daemon/rp_publish.c daemon/rp_stats.c
 DMN_HDRS := $(wildcard core/include/rigpose/*.h platform/include/rigpose/*.h daemon/*.h \
                        platform/sim/*.h)
 # The platform's library (platform/platform.mk): the HAL sources, the sim source and the
@@ -41,8 +41,9 @@ run-daemon: deps $(REL)/rigpose
 	$(REL)/rigpose --config config/sim.yaml $(DAEMON_ARGS)
 
 # ---- tests ---------------------------------------------------------------------------------------
-# cmocka tests of the configuration parser, the sim source and the estimator dispatch, in a
-# double and a float variant (sanitised); then the LCM test between processes (script).
+# cmocka tests of the configuration parser, the sim source and the estimator dispatch, the
+# command line, the publish path (no allocation) and the status accounting, in a double and a
+# float variant (sanitised); then the LCM test between processes (script).
 define DMN_TEST
 $(DMN)/$(1)/test_config: daemon/tests/test_config.c platform/src/rp_config.c $(DMN_HDRS) \
                          tests/rp_test.h $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a
@@ -60,6 +61,30 @@ $(DMN)/$(1)/test_est: daemon/tests/test_est.c daemon/rp_est.c platform/src/rp_co
 	    daemon/tests/test_est.c daemon/rp_est.c platform/src/rp_config.c \
 	    platform/src/rp_hal_sim.c $$(DMN_HAL_SAN_LIB) $(BUILD)/$(1)/librigpose_sim.a \
 	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) -lcmocka $$(HAL_LIBS) -lstdc++ -lm
+$(DMN)/$(1)/test_args: daemon/tests/test_args.c daemon/rp_args.c platform/src/rp_config.c \
+                       $(DMN_HDRS) tests/rp_test.h $(BUILD)/$(1)/librigpose_sim.a \
+                       $(BUILD)/$(1)/librigpose_core.a
+	@mkdir -p $$(dir $$@)
+	$(CC) $(CSTD) $(WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) \
+	    daemon/tests/test_args.c daemon/rp_args.c platform/src/rp_config.c \
+	    $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a \
+	    -o $$@ $(SAN) -lyaml -lcmocka -lstdc++ -lm
+$(DMN)/$(1)/test_stats: daemon/tests/test_stats.c daemon/rp_stats.c $(DMN_HDRS) tests/rp_test.h \
+                        $(DMN_LCM)/stamp $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a
+	@mkdir -p $$(dir $$@)
+	$(CC) $(CSTD) $(WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) \
+	    daemon/tests/test_stats.c daemon/rp_stats.c $(BUILD)/$(1)/librigpose_sim.a \
+	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) -lcmocka -lstdc++ -lm
+# The publish path under an allocation counter: malloc, calloc, realloc and free wrapped.
+$(DMN)/$(1)/test_publish: daemon/tests/test_publish.c daemon/rp_publish.c daemon/rp_stats.c \
+                          $(DMN_HDRS) tests/rp_test.h $(DMN_LCM)/librigpose_lcm.a \
+                          $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a
+	@mkdir -p $$(dir $$@)
+	$(CC) $(CSTD) $(WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) \
+	    daemon/tests/test_publish.c daemon/rp_publish.c daemon/rp_stats.c \
+	    $(DMN_LCM)/librigpose_lcm.a $(BUILD)/$(1)/librigpose_sim.a \
+	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) \
+	    -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free -lcmocka -llcm -lstdc++ -lm
 endef
 $(foreach v,$(DMN_VARIANTS),$(eval $(call DMN_TEST,$(v))))
 
@@ -69,7 +94,9 @@ $(DMN)/run_test_lcm: daemon/tests/test_lcm.sh daemon/tests/lcm_sub.py
 	printf '#!/bin/sh\nexec %s/daemon/tests/test_lcm.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
 	chmod +x $@
 
-DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est)
+DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est \
+                                     $(DMN)/$(v)/test_args $(DMN)/$(v)/test_publish \
+                                     $(DMN)/$(v)/test_stats)
 HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm
 SERIAL_TESTS += $(DMN)/run_test_lcm
 test: $(DMN_TESTS) $(DMN)/run_test_lcm $(REL)/rigpose $(DMN_LCM)/stamp

@@ -1,6 +1,7 @@
 /*
  * test_est.c - the daemon's feature path: the HAL's sim source (platform/src/rp_hal_sim.c)
- * feeding the configured estimator (daemon/rp_est.c), as `rigpose` runs them.
+ * feeding the configured estimator (daemon/rp_est.c), as `rigpose` runs them (the methods
+ * through rp_hal_open, the source's own checks through its typed API).
  *   - the sim source delivers frame sets in order with features, the truth and monotonic
  *     capture times; it ends after sim_frames sets; calls out of order are refused;
  *   - every method of the configuration file follows the simulated truth;
@@ -43,7 +44,7 @@ static void test_sim_source_delivers_ordered_sets_then_ends(void **state)
         assert_int_equal(rp_hal_sim_grab(sim, &g_set), RP_HAL_OK);
         assert_int_equal(g_set.seq, j);
         assert_int_equal(g_set.n_cams, 6);
-        assert_true(g_set.has_feats && g_set.feats != NULL && g_set.has_truth);
+        assert_true(g_set.payload == RP_HAL_PAYLOAD_FEATS && g_set.feats != NULL && g_set.has_truth);
         assert_true(g_set.utime >= prev);
         prev = g_set.utime;
         assert_int_equal(g_set.feats->utime, (int64_t)(j * 1000000.0 / 30.0 + 0.5));
@@ -99,14 +100,19 @@ static unsigned run_method(rp_method_t m, uint32_t frames, const rp_hal_sim_opts
     }
     g_cfg.hal.sim_frames = frames;
     assert_ok(rp_est_init(&g_est, &g_cfg));
-    rp_hal_sim_t *sim = NULL;
-    assert_int_equal(rp_hal_sim_open(&sim, &g_cfg.hal, opts), RP_HAL_OK);
-    assert_int_equal(rp_hal_sim_start(sim), RP_HAL_OK);
+    /* As the daemon opens it: through the HAL's table, the options in cfg.sim_opts. */
+    rp_hal_cfg_t hc = g_cfg.hal;
+    hc.sim_opts = opts;
+    rp_hal_source_t *src = NULL;
+    assert_int_equal(rp_hal_open(&src, &hc), RP_HAL_OK);
+    assert_int_equal(rp_hal_payload(src), RP_HAL_PAYLOAD_FEATS);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
     unsigned tracking = 0;
     *et = *er = 0.0;
     *n_gone_sets = 0;
     for (uint32_t j = 0; j < frames; ++j) {
-        assert_int_equal(rp_hal_sim_grab(sim, &g_set), RP_HAL_OK);
+        assert_int_equal(rp_hal_grab(src, &g_set), RP_HAL_OK);
+        assert_int_equal(g_set.payload, RP_HAL_PAYLOAD_FEATS);
         rp_estimate_t est;
         (void)rp_est_step(&g_est, g_set.feats, &est);
         tracking += (est.flags & RP_EST_TRACKING) ? 1u : 0u;
@@ -125,8 +131,8 @@ static unsigned run_method(rp_method_t m, uint32_t frames, const rp_hal_sim_opts
             }
         }
     }
-    assert_int_equal(rp_hal_sim_stop(sim), RP_HAL_OK);
-    rp_hal_sim_close(sim);
+    assert_int_equal(rp_hal_stop(src), RP_HAL_OK);
+    rp_hal_close(src);
     return tracking;
 }
 

@@ -9,8 +9,6 @@
 #include <string.h>
 #include <time.h>
 
-#include "rigpose/rp_hal_sim.h"
-
 const char *rp_hal_status_str(rp_hal_status_t s)
 {
     switch (s) {
@@ -44,28 +42,6 @@ void rp_hal_set_clear(rp_hal_set_t *set, uint8_t n)
     }
 }
 
-/* The sim source has its own typed API (rp_hal_sim.h); adapt it to the table. */
-static rp_hal_status_t sim_open(void **ctx, const rp_hal_cfg_t *cfg, char *err)
-{
-    rp_hal_sim_t *sim = NULL;
-    const rp_hal_status_t st = rp_hal_sim_open(&sim, cfg, NULL);
-    *ctx = sim;
-    if (st != RP_HAL_OK) {
-        return rp_hal_fail(err, st, "sim: cannot open the simulated rig (%u cameras, want 6)",
-                           (unsigned)cfg->n_cams);
-    }
-    return st;
-}
-static rp_hal_status_t sim_start(void *ctx) { return rp_hal_sim_start((rp_hal_sim_t *)ctx); }
-static rp_hal_status_t sim_grab(void *ctx, rp_hal_set_t *set)
-{
-    return rp_hal_sim_grab((rp_hal_sim_t *)ctx, set);
-}
-static rp_hal_status_t sim_stop(void *ctx) { return rp_hal_sim_stop((rp_hal_sim_t *)ctx); }
-static void sim_close(void *ctx) { rp_hal_sim_close((rp_hal_sim_t *)ctx); }
-
-static const rp_hal_ops_t sim_ops = {"sim", sim_open, sim_start, sim_grab, sim_stop, sim_close};
-
 struct rp_hal_source {
     const rp_hal_ops_t *ops; /* NULL while closed */
     void *ctx;
@@ -97,7 +73,7 @@ rp_hal_status_t rp_hal_open(rp_hal_source_t **src, const rp_hal_cfg_t *cfg)
     switch (cfg->kind) {
     case RP_HAL_SRC_V4L2: ops = &rp_hal_v4l2_ops; break;
     case RP_HAL_SRC_REPLAY: ops = &rp_hal_replay_ops; break;
-    case RP_HAL_SRC_SIM: ops = &sim_ops; break;
+    case RP_HAL_SRC_SIM: ops = &rp_hal_sim_ops; break;
     }
     if (ops == NULL) {
         return rp_hal_fail(g_src.err, RP_HAL_E_ARG, "unknown source kind %d", (int)cfg->kind);
@@ -147,6 +123,14 @@ void rp_hal_close(rp_hal_source_t *src)
     src->ops->close(src->ctx);
     src->ops = NULL;
     src->ctx = NULL;
+}
+
+rp_hal_payload_t rp_hal_payload(const rp_hal_source_t *src)
+{
+    if (src == NULL || src->ops == NULL) {
+        return RP_HAL_PAYLOAD_IMAGES;
+    }
+    return src->ops->payload;
 }
 
 const char *rp_hal_errmsg(const rp_hal_source_t *src)

@@ -15,6 +15,7 @@
  * later calls; it writes there whenever it returns a failure. */
 typedef struct {
     const char *name;
+    rp_hal_payload_t payload; /* what its sets carry */
     rp_hal_status_t (*open)(void **ctx, const rp_hal_cfg_t *cfg, char *err);
     rp_hal_status_t (*start)(void *ctx);
     rp_hal_status_t (*grab)(void *ctx, rp_hal_set_t *set);
@@ -24,6 +25,7 @@ typedef struct {
 
 extern const rp_hal_ops_t rp_hal_v4l2_ops;
 extern const rp_hal_ops_t rp_hal_replay_ops;
+extern const rp_hal_ops_t rp_hal_sim_ops;
 
 /* printf into err (RP_HAL_ERR_MAX bytes), truncating; returns st so a failure is one line:
  * return rp_hal_fail(err, RP_HAL_E_OPEN, "%s: %s", path, strerror(errno)); */

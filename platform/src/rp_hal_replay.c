@@ -492,5 +492,6 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
     return RP_HAL_OK;
 }
 
-const rp_hal_ops_t rp_hal_replay_ops = {"replay", replay_open, replay_start, replay_grab,
-                                        replay_stop, replay_close};
+const rp_hal_ops_t rp_hal_replay_ops = {
+    .name = "replay", .payload = RP_HAL_PAYLOAD_IMAGES, .open = replay_open,
+    .start = replay_start, .grab = replay_grab, .stop = replay_stop, .close = replay_close};

@@ -1,11 +1,13 @@
 /*
  * rp_hal_sim.c - the HAL's sim source (rp_hal_sim.h): frame sets of features and the true pose
- * from the feature-level simulation of the paper's protocol.
+ * from the feature-level simulation of the paper's protocol. Its typed API (rp_hal_sim_*) and
+ * its table for rp_hal_open (rp_hal_sim_ops) are the same functions.
  */
 #include "rigpose/rp_hal_sim.h"
 
 #include <string.h>
 
+#include "rp_hal_priv.h"
 #include "rp_sim.h"
 
 struct rp_hal_sim {
@@ -20,10 +22,13 @@ struct rp_hal_sim {
     int64_t frame_us;  /* simulated frame interval, us */
     uint32_t drops[RP_MAX_CAMS];
     rp_frameset_t fs;  /* the features of the last set (set->feats points here) */
+    char *err;         /* where failures are told (RP_HAL_ERR_MAX bytes): the HAL source's
+                        * buffer when opened through rp_hal_open, else g_err */
 };
 
 /* One source per process (rp_hal.h): the state is static, as on the board. */
 static rp_hal_sim_t g_sim;
+static char g_err[RP_HAL_ERR_MAX]; /* messages of the typed API's calls */
 
 rp_hal_sim_opts_t rp_hal_sim_default_opts(void)
 {
@@ -34,20 +39,31 @@ rp_hal_sim_opts_t rp_hal_sim_default_opts(void)
     return o;
 }
 
-rp_hal_status_t rp_hal_sim_open(rp_hal_sim_t **sim, const rp_hal_cfg_t *cfg,
-                                const rp_hal_sim_opts_t *opts)
+/* Open into g_sim, telling a failure in err (RP_HAL_ERR_MAX bytes, kept for later calls). */
+static rp_hal_status_t sim_open(rp_hal_sim_t **sim, const rp_hal_cfg_t *cfg,
+                                const rp_hal_sim_opts_t *opts, char *err)
 {
     if (sim == NULL || cfg == NULL) {
-        return RP_HAL_E_ARG;
+        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: NULL argument");
     }
     *sim = NULL;
     const rp_hal_sim_opts_t o = opts != NULL ? *opts : rp_hal_sim_default_opts();
-    if (cfg->kind != RP_HAL_SRC_SIM || cfg->n_cams != RP_SIM_NCAMS || !(o.noise_px >= 0.0) ||
-        o.noise_px > 100.0 || o.drop_cam < -1 || o.drop_cam >= RP_SIM_NCAMS) {
-        return RP_HAL_E_ARG;
+    if (cfg->kind != RP_HAL_SRC_SIM) {
+        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: source kind %d is not sim", (int)cfg->kind);
+    }
+    if (cfg->n_cams != RP_SIM_NCAMS) {
+        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: the simulated rig has %d cameras, not %u",
+                           RP_SIM_NCAMS, (unsigned)cfg->n_cams);
+    }
+    if (!(o.noise_px >= 0.0) || o.noise_px > 100.0) {
+        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: noise_px %g out of 0..100 px", o.noise_px);
+    }
+    if (o.drop_cam < -1 || o.drop_cam >= RP_SIM_NCAMS) {
+        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: drop_cam %d out of -1..%d", (int)o.drop_cam,
+                           RP_SIM_NCAMS - 1);
     }
     if (g_sim.open) {
-        return RP_HAL_E_ARG;
+        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: already open (one source per process)");
     }
     rp_sim_cfg_t sc;
     rp_sim_default_cfg(&sc);
@@ -57,14 +73,29 @@ rp_hal_status_t rp_hal_sim_open(rp_hal_sim_t **sim, const rp_hal_cfg_t *cfg,
     }
     memset(&g_sim, 0, sizeof g_sim);
     if (rp_sim_run_init(&g_sim.run, &sc, cfg->sim_seed, 0) != 0) {
-        return RP_HAL_E_OPEN;
+        return rp_hal_fail(err, RP_HAL_E_OPEN, "sim: cannot set up the run of %u frame sets "
+                           "(seed %u)", (unsigned)sc.n_frames, (unsigned)cfg->sim_seed);
     }
     g_sim.cfg = *cfg;
+    g_sim.cfg.sim_opts = NULL; /* read at open only */
     g_sim.opts = o;
     g_sim.frame_us = (int64_t)(sc.frame_dt * 1e6 + 0.5);
+    g_sim.err = err;
     g_sim.open = 1;
     *sim = &g_sim;
     return RP_HAL_OK;
+}
+
+rp_hal_status_t rp_hal_sim_open(rp_hal_sim_t **sim, const rp_hal_cfg_t *cfg,
+                                const rp_hal_sim_opts_t *opts)
+{
+    g_err[0] = '\0';
+    return sim_open(sim, cfg, opts, g_err);
+}
+
+const char *rp_hal_sim_errmsg(void)
+{
+    return g_err;
 }
 
 rp_hal_status_t rp_hal_sim_start(rp_hal_sim_t *sim)
@@ -73,7 +104,7 @@ rp_hal_status_t rp_hal_sim_start(rp_hal_sim_t *sim)
         return RP_HAL_E_ARG;
     }
     if (sim->started) {
-        return RP_HAL_E_STATE;
+        return rp_hal_fail(sim->err, RP_HAL_E_STATE, "sim: started twice");
     }
     sim->started = 1;
     sim->seq = 0;
@@ -87,11 +118,12 @@ rp_hal_status_t rp_hal_sim_grab(rp_hal_sim_t *sim, rp_hal_set_t *set)
         return RP_HAL_E_ARG;
     }
     if (!sim->started) {
-        return RP_HAL_E_STATE;
+        return rp_hal_fail(sim->err, RP_HAL_E_STATE, "sim: grab before start");
     }
     const uint32_t j = sim->next;
     if (j >= sim->run.cfg.n_frames) {
-        return RP_HAL_E_END;
+        return rp_hal_fail(sim->err, RP_HAL_E_END, "sim: end after %u sets",
+                           (unsigned)sim->run.cfg.n_frames);
     }
     int64_t t = rp_hal_now_us();
     if (sim->cfg.realtime) {
@@ -119,7 +151,7 @@ rp_hal_status_t rp_hal_sim_grab(rp_hal_sim_t *sim, rp_hal_set_t *set)
         }
         f->drops = sim->drops[k];
     }
-    set->has_feats = 1;
+    set->payload = RP_HAL_PAYLOAD_FEATS;
     set->feats = &sim->fs;
     set->has_truth = 1;
     for (int i = 0; i < 6; ++i) {
@@ -136,7 +168,7 @@ rp_hal_status_t rp_hal_sim_stop(rp_hal_sim_t *sim)
         return RP_HAL_E_ARG;
     }
     if (!sim->started) {
-        return RP_HAL_E_STATE;
+        return rp_hal_fail(sim->err, RP_HAL_E_STATE, "sim: stop before start");
     }
     sim->started = 0;
     return RP_HAL_OK;
@@ -150,3 +182,24 @@ void rp_hal_sim_close(rp_hal_sim_t *sim)
     rp_sim_run_free(&sim->run);
     memset(sim, 0, sizeof *sim);
 }
+
+/* ---- the table for rp_hal_open ----------------------------------------------------------------- */
+
+static rp_hal_status_t ops_open(void **ctx, const rp_hal_cfg_t *cfg, char *err)
+{
+    rp_hal_sim_t *sim = NULL;
+    const rp_hal_status_t st = sim_open(&sim, cfg, cfg->sim_opts, err);
+    *ctx = sim;
+    return st;
+}
+static rp_hal_status_t ops_start(void *ctx) { return rp_hal_sim_start((rp_hal_sim_t *)ctx); }
+static rp_hal_status_t ops_grab(void *ctx, rp_hal_set_t *set)
+{
+    return rp_hal_sim_grab((rp_hal_sim_t *)ctx, set);
+}
+static rp_hal_status_t ops_stop(void *ctx) { return rp_hal_sim_stop((rp_hal_sim_t *)ctx); }
+static void ops_close(void *ctx) { rp_hal_sim_close((rp_hal_sim_t *)ctx); }
+
+const rp_hal_ops_t rp_hal_sim_ops = {
+    .name = "sim", .payload = RP_HAL_PAYLOAD_FEATS, .open = ops_open, .start = ops_start,
+    .grab = ops_grab, .stop = ops_stop, .close = ops_close};

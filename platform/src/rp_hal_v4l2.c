@@ -831,5 +831,6 @@ rp_hal_status_t rp_hal_v4l2_describe(uint8_t cam, char *buf, size_t cap)
     return RP_HAL_OK;
 }
 
-const rp_hal_ops_t rp_hal_v4l2_ops = {"v4l2", v4l2_open, v4l2_start, v4l2_grab, v4l2_stop,
-                                      v4l2_close};
+const rp_hal_ops_t rp_hal_v4l2_ops = {
+    .name = "v4l2", .payload = RP_HAL_PAYLOAD_IMAGES, .open = v4l2_open, .start = v4l2_start,
+    .grab = v4l2_grab, .stop = v4l2_stop, .close = v4l2_close};

@@ -10,6 +10,9 @@
  *   sim     the simulated rig (platform/src/rp_hal_sim.c): the feature-level simulation of
  *           rigpose-sim, so the daemon runs with no hardware; delivers features and the truth.
  *
+ * All three go through the same calls (one const table of functions per source). A set carries
+ * either images or features (rp_hal_payload_t, in set->payload and rp_hal_payload(src)).
+ *
  * Not core code: sources may use the OS (open, ioctl, mmap, files) but keep their buffers in the
  * source object or in fixed-size arrays; grab never blocks longer than cfg.timeout_ms.
  * Every function returns an rp_hal_status_t the caller can act on.
@@ -42,6 +45,14 @@ const char *rp_hal_status_str(rp_hal_status_t s);
 
 typedef enum { RP_HAL_SRC_V4L2 = 0, RP_HAL_SRC_REPLAY, RP_HAL_SRC_SIM } rp_hal_kind_t;
 
+/* What a source's sets carry. */
+typedef enum {
+    RP_HAL_PAYLOAD_IMAGES = 0, /* each camera's 8-bit grey image (v4l2, replay) */
+    RP_HAL_PAYLOAD_FEATS       /* one frame set of tracked features, no images (sim) */
+} rp_hal_payload_t;
+
+struct rp_hal_sim_opts; /* rp_hal_sim.h */
+
 #define RP_HAL_PATH_MAX 256
 
 /* Largest image a source delivers (each camera's grey buffer is this big, statically). */
@@ -73,6 +84,9 @@ typedef struct {
     uint32_t sim_frames;                 /* sim: frames in the run (0 = the protocol's 100) */
     uint8_t sim_layout;                  /* sim: 0 = both stereo pairs (4 cams), 1 = four singles */
     uint8_t realtime;                    /* replay / sim: pace sets at their timestamps */
+    const struct rp_hal_sim_opts *sim_opts; /* sim: pixel noise, a vanishing camera
+                                             * (rp_hal_sim.h); NULL: the protocol's defaults.
+                                             * Read by rp_hal_open only */
 } rp_hal_cfg_t;
 
 /* Per-camera state in one set. */
@@ -96,8 +110,9 @@ typedef struct {
     uint32_t seq;      /* set counter since start, +1 per grab that returned RP_HAL_OK */
     uint8_t n_cams;
     rp_hal_frame_t cam[RP_MAX_CAMS];
-    /* Sources that deliver features instead of images (the feature-level sim). */
-    uint8_t has_feats;
+    /* What the set carries: RP_HAL_PAYLOAD_IMAGES, cam[k].img; RP_HAL_PAYLOAD_FEATS, the
+     * features of all cameras in *feats (valid until the next grab; NULL for images). */
+    rp_hal_payload_t payload;
     const rp_frameset_t *feats;
     /* Sources that know the truth (sim, replay with ground truth): pose of cam1 in the world,
      * [tx ty tz alpha beta gamma] as in rp_estimate_t. */
@@ -115,6 +130,9 @@ rp_hal_status_t rp_hal_start(rp_hal_source_t *src);
 rp_hal_status_t rp_hal_grab(rp_hal_source_t *src, rp_hal_set_t *set);
 rp_hal_status_t rp_hal_stop(rp_hal_source_t *src);
 void rp_hal_close(rp_hal_source_t *src);
+
+/* What the open source's sets carry (the same in every set); RP_HAL_PAYLOAD_IMAGES for NULL. */
+rp_hal_payload_t rp_hal_payload(const rp_hal_source_t *src);
 
 /* What went wrong in the source's last failing call, in words naming the device or file (and
  * line), e.g. "rec/frames.csv:7: want utime_us and 4 image paths"; "" if nothing failed. src NULL:

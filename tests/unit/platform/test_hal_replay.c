@@ -126,12 +126,15 @@ static void test_replay_pgm_png_truth(void **state)
     cfg.cam[0].h = H;
     rp_hal_source_t *src;
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_payload(src), RP_HAL_PAYLOAD_IMAGES);
     rp_hal_set_t set;
     assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_STATE);
     assert_int_equal(rp_hal_start(src), RP_HAL_OK);
     const int64_t want_u[3] = {1000, 34333, 67666};
     for (int j = 0; j < 3; j++) {
         assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_int_equal(set.payload, RP_HAL_PAYLOAD_IMAGES);
+        assert_null(set.feats);
         assert_int_equal(set.n_cams, 2);
         assert_int_equal(set.seq, j);
         assert_true(set.utime == want_u[j]);
