@@ -147,8 +147,8 @@ rp_status_t rp_pipe_layout_from_name(const char *name, rp_pipe_layout_t *layout)
 
 /* Defaults for layout on the paper's rig as rigpose-sim numbers its cameras (0 cam1, 1 cam2,
  * 2 cam3, 3 cam4, 4 cam1's stereo partner, 5 cam3's): pairs (0,4) and (2,5); gc and rc over
- * 0..3; camK over camera K-1. Every component's own defaults otherwise, except the stereo
- * EKF's plant noise: q_trans = q_rot = 3 (rp_pipe.c says why). A rig numbered
+ * 0..3; camK over camera K-1. Every other field is its component's *_default_cfg, unchanged
+ * (the one source of defaults: config/README.md lists them per layout). A rig numbered
  * differently (e.g. a KITTI pair: 0 left, 1 right) sets the camera fields after this call.
  * RP_E_ARG: NULL or bad layout. */
 rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg);
