@@ -52,11 +52,16 @@ enum {
 
 /* The pose message's per-camera arrays hold RP_MAX_CAMS entries. */
 RP_STATIC_ASSERT(RP_MAX_CAMS == 6, "lcm_types: per-camera arrays are of 6");
-RP_STATIC_ASSERT((int)RP_METHOD_RC == (int)RP_PIPE_RC && (int)RP_METHOD_GC == (int)RP_PIPE_GC,
-                 "rp_method_t and rp_pipe_layout_t agree");
 /* The messages carry the core's and the HAL's codes as they are. */
-RP_STATIC_ASSERT(RIGPOSE_POSE_T_METHOD_RC == RP_METHOD_RC && RIGPOSE_POSE_T_METHOD_GC == RP_METHOD_GC,
-                 "pose_t.METHOD_* are rp_method_t");
+RP_STATIC_ASSERT(RIGPOSE_POSE_T_METHOD_STEREO4 == RP_PIPE_STEREO4 &&
+                     RIGPOSE_POSE_T_METHOD_STEREO2 == RP_PIPE_STEREO2 &&
+                     RIGPOSE_POSE_T_METHOD_GC == RP_PIPE_GC &&
+                     RIGPOSE_POSE_T_METHOD_CAM1 == RP_PIPE_CAM1 &&
+                     RIGPOSE_POSE_T_METHOD_CAM2 == RP_PIPE_CAM2 &&
+                     RIGPOSE_POSE_T_METHOD_CAM3 == RP_PIPE_CAM3 &&
+                     RIGPOSE_POSE_T_METHOD_CAM4 == RP_PIPE_CAM4 &&
+                     RIGPOSE_POSE_T_METHOD_RC == RP_PIPE_RC && RP_PIPE_LAYOUT_COUNT_ == 8,
+                 "pose_t.METHOD_* are rp_pipe_layout_t, all eight");
 RP_STATIC_ASSERT(RIGPOSE_POSE_T_FLAG_LOST == RP_EST_LOST &&
                      RIGPOSE_POSE_T_FLAG_SCALE_WEAK == RP_EST_SCALE_WEAK,
                  "pose_t.FLAG_* are RP_EST_*");
@@ -325,7 +330,7 @@ static rp_status_t estimator_step(const rp_hal_set_t *set, rp_estimate_t *est,
 /* ---- messages ---------------------------------------------------------------------------------- */
 
 static void fill_pose(rigpose_pose_t *m, const rp_hal_set_t *set, const rp_estimate_t *est,
-                      rp_status_t st, int32_t seq, uint8_t n_cams, rp_method_t method)
+                      rp_status_t st, int32_t seq, uint8_t n_cams, rp_pipe_layout_t method)
 {
     memset(m, 0, sizeof *m);
     m->utime = set->utime;
@@ -418,7 +423,7 @@ static void fill_status(rigpose_status_t *m, status_acc_t *a, const rp_config_t 
     m->source = (int8_t)(cfg->hal.kind == RP_HAL_SRC_V4L2     ? RIGPOSE_STATUS_T_SOURCE_V4L2
                          : cfg->hal.kind == RP_HAL_SRC_REPLAY ? RIGPOSE_STATUS_T_SOURCE_REPLAY
                                                               : RIGPOSE_STATUS_T_SOURCE_SIM);
-    m->method = (int8_t)cfg->method;
+    m->method = (int8_t)cfg->pipe.layout;
     m->hal_status = (int32_t)hal_st;
     m->n_cams = (int8_t)cfg->rig.n_cams;
     for (int k = 0; k < cfg->rig.n_cams; ++k) {
@@ -498,7 +503,7 @@ int main(int argc, char **argv)
     const rp_status_t est_st = estimator_init(&g_cfg);
     if (est_st != RP_OK) {
         fprintf(stderr, "rigpose: %s: method %s refused the configuration: %s\n", o.config,
-                rp_method_name(g_cfg.method), rp_status_str(est_st));
+                rp_pipe_layout_name(g_cfg.pipe.layout), rp_status_str(est_st));
         return EXIT_ESTIMATOR;
     }
 
@@ -530,8 +535,8 @@ int main(int argc, char **argv)
     printf("rigpose: %s: source %s, %u cameras, method %s, LCM %s (%s, %s)\n", o.config,
            g_cfg.hal.kind == RP_HAL_SRC_SIM ? "sim" : g_cfg.hal.kind == RP_HAL_SRC_V4L2 ? "v4l2"
                                                                                      : "replay",
-           g_cfg.rig.n_cams, rp_method_name(g_cfg.method), g_cfg.lcm_url, g_cfg.pose_channel,
-           g_cfg.status_channel);
+           g_cfg.rig.n_cams, rp_pipe_layout_name(g_cfg.pipe.layout), g_cfg.lcm_url,
+           g_cfg.pose_channel, g_cfg.status_channel);
     if (!o.quiet) {
         printf("%6s %9s %9s %9s %9s %9s %9s  %-16s %5s %8s%s\n", "seq", "tx m", "ty m", "tz m",
                "alpha", "beta", "gamma", "flags", "feats", "lat ms",
@@ -578,7 +583,7 @@ int main(int argc, char **argv)
         const rp_status_t st = estimator_step(&g_set, &est, &fs);
 
         rigpose_pose_t pm;
-        fill_pose(&pm, &g_set, &est, st, pose_seq, g_cfg.rig.n_cams, g_cfg.method);
+        fill_pose(&pm, &g_set, &est, st, pose_seq, g_cfg.rig.n_cams, g_cfg.pipe.layout);
         const int64_t t_pub = rp_hal_now_us();
         pm.publish_utime = t_pub;
         if (rigpose_pose_t_publish(lcm, g_cfg.pose_channel, &pm) != 0) {

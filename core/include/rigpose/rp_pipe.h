@@ -59,15 +59,19 @@ extern "C" {
 RP_STATIC_ASSERT(RP_PIPE_MAX_TRACKERS >= 2 && RP_PIPE_MAX_TRACKERS <= RP_MAX_CAMS,
                  "RP_PIPE_MAX_TRACKERS: 2..RP_MAX_CAMS");
 
+/* The layouts: the one list of them (the configuration file's estimator.method, the tools'
+ * --methods, the daemon). The values are rigpose.pose_t's METHOD_* constants
+ * (lcm_types/rigpose_pose_t.lcm), which the daemon checks at compile time; names as
+ * rp_pipe_layout_name gives them. */
 typedef enum {
     RP_PIPE_STEREO4 = 0,
-    RP_PIPE_STEREO2,
-    RP_PIPE_GC,
-    RP_PIPE_CAM1,
-    RP_PIPE_CAM2,
-    RP_PIPE_CAM3,
-    RP_PIPE_CAM4,
-    RP_PIPE_RC,
+    RP_PIPE_STEREO2 = 1,
+    RP_PIPE_GC = 2,
+    RP_PIPE_CAM1 = 3,
+    RP_PIPE_CAM2 = 4,
+    RP_PIPE_CAM3 = 5,
+    RP_PIPE_CAM4 = 6,
+    RP_PIPE_RC = 7,
     RP_PIPE_LAYOUT_COUNT_ /* number of layouts; not a layout */
 } rp_pipe_layout_t;
 
