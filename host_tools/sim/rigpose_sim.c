@@ -82,7 +82,7 @@ typedef struct {
  * (zeroed); `init` starts a run on that memory (the rig outlives the run); `step` processes one
  * frame set and always fills est. Adding a method = writing its two adapters and one entry. */
 typedef struct {
-    const char *name;      /* --methods token */
+    rp_pipe_layout_t layout; /* its name (rp_pipe_layout_name) is the --methods token */
     const char *paper;     /* Table 1 row it is compared with */
     size_t state_size;
     rp_status_t (*init)(void *state, const rp_rig_t *rig, const method_opts_t *o);
@@ -261,15 +261,15 @@ static rp_status_t rc_step(void *state, const rp_frameset_t *fs, rp_estimate_t *
 }
 
 static const method_t methods[] = {
-    {"stereo4", "4 cameras", sizeof(rp_vo_stereo_t), stereo4_init, stereo_step},
-    {"stereo2", "2 cameras", sizeof(rp_vo_stereo_t), stereo2_init, stereo_step},
-    {"cam1", "cam 1", sizeof(rp_vo_mono_t), cam1_init, mono_step},
-    {"cam2", "cam 2", sizeof(rp_vo_mono_t), cam2_init, mono_step},
-    {"cam3", "cam 3", sizeof(rp_vo_mono_t), cam3_init, mono_step},
-    {"cam4", "cam 4", sizeof(rp_vo_mono_t), cam4_init, mono_step},
-    {"rc", "RC", sizeof(rc_state_t), rc_init, rc_step},
+    {RP_PIPE_STEREO4, "4 cameras", sizeof(rp_vo_stereo_t), stereo4_init, stereo_step},
+    {RP_PIPE_STEREO2, "2 cameras", sizeof(rp_vo_stereo_t), stereo2_init, stereo_step},
+    {RP_PIPE_CAM1, "cam 1", sizeof(rp_vo_mono_t), cam1_init, mono_step},
+    {RP_PIPE_CAM2, "cam 2", sizeof(rp_vo_mono_t), cam2_init, mono_step},
+    {RP_PIPE_CAM3, "cam 3", sizeof(rp_vo_mono_t), cam3_init, mono_step},
+    {RP_PIPE_CAM4, "cam 4", sizeof(rp_vo_mono_t), cam4_init, mono_step},
+    {RP_PIPE_RC, "RC", sizeof(rc_state_t), rc_init, rc_step},
     /* cam1..cam4 -> "cam 1".."cam 4", rc -> "RC", gc -> "2 cameras" (no paper row) */
-    {"gc", "2 cameras", sizeof(rp_vo_gc_t), gc_init, gc_step},
+    {RP_PIPE_GC, "2 cameras", sizeof(rp_vo_gc_t), gc_init, gc_step},
 };
 #define N_KNOWN_METHODS (sizeof methods / sizeof methods[0])
 
@@ -298,7 +298,7 @@ static void usage(FILE *out, const char *argv0)
             "  --methods LIST   comma-separated methods (default stereo4,stereo2); known:",
             argv0);
     for (size_t i = 0; i < N_KNOWN_METHODS; ++i) {
-        fprintf(out, " %s", methods[i].name);
+        fprintf(out, " %s", rp_pipe_layout_name(methods[i].layout));
     }
     fprintf(out,
             "\n"
@@ -374,7 +374,8 @@ static int parse_methods(const char *list, opts_t *o)
         const size_t len = comma ? (size_t)(comma - p) : strlen(p);
         const method_t *found = NULL;
         for (size_t i = 0; i < N_KNOWN_METHODS; ++i) {
-            if (strlen(methods[i].name) == len && strncmp(methods[i].name, p, len) == 0) {
+            const char *name = rp_pipe_layout_name(methods[i].layout);
+            if (strlen(name) == len && strncmp(name, p, len) == 0) {
                 found = &methods[i];
             }
         }
@@ -384,7 +385,8 @@ static int parse_methods(const char *list, opts_t *o)
         }
         for (unsigned i = 0; i < o->n_methods; ++i) {
             if (o->m[i] == found) {
-                fprintf(stderr, "rigpose-sim: method '%s' given twice\n", found->name);
+                fprintf(stderr, "rigpose-sim: method '%s' given twice\n",
+                        rp_pipe_layout_name(found->layout));
                 return -1;
             }
         }
@@ -584,7 +586,8 @@ static void *worker(void *arg)
         for (unsigned m = 0; ok && m < o->n_methods; ++m) {
             const rp_status_t st = o->m[m]->init(state[m], &rig, &mo);
             if (st != RP_OK) {
-                job_fail(job, "%s: init failed: %s", o->m[m]->name, rp_status_str(st));
+                job_fail(job, "%s: init failed: %s", rp_pipe_layout_name(o->m[m]->layout),
+                         rp_status_str(st));
                 ok = 0;
             }
         }
@@ -686,7 +689,7 @@ static void print_json(const opts_t *o, const summary_t *s)
            "\"noise_px\": %.6g, \"rows\": [",
            o->runs, o->frames, (unsigned long long)o->seed, o->focal_px, o->noise_px);
     for (unsigned m = 0; m < o->n_methods; ++m) {
-        printf("%s{\"method\": \"%s\", ", m ? ", " : "", o->m[m]->name);
+        printf("%s{\"method\": \"%s\", ", m ? ", " : "", rp_pipe_layout_name(o->m[m]->layout));
         for (int c = 0; c < NCOL; ++c) {
             json_num(col_name[c], s[m].mean[c], 1);
         }
@@ -731,7 +734,7 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
         const method_t *me = o->m[m];
         const paper_row_t *pr = paper_row(me->paper);
         char label[64];
-        snprintf(label, sizeof label, "%s", me->name);
+        snprintf(label, sizeof label, "%s", rp_pipe_layout_name(me->layout));
         print_cols(label, s[m].mean, "%10.6f");
         printf("%10.1f%8llu\n", s[m].us_per_frame, (unsigned long long)s[m].lost);
         if (pr) {
@@ -827,7 +830,7 @@ static void print_layout_json(const opts_t *o, const rp_sim_layout_t *lay, uint3
     printf("{\"runs\": %u, \"frames\": %u, \"seed\": %llu, \"source\": \"%s\", "
            "\"ranked_by\": \"%s mean translation error\", \"placements\": [",
            o->runs, o->frames, (unsigned long long)o->seed,
-           o->layout_file ? o->layout_file : "grid", o->m[0]->name);
+           o->layout_file ? o->layout_file : "grid", rp_pipe_layout_name(o->m[0]->layout));
     for (uint32_t k = 0; k < n; ++k) {
         const uint32_t i = order[k];
         const rp_sim_layout_t *l = &lay[i];
@@ -838,7 +841,7 @@ static void print_layout_json(const opts_t *o, const rp_sim_layout_t *lay, uint3
                l->cam4.D[1], l->cam4.D[2], l->cam4.yaw * 180.0 / SIM_PI);
         for (unsigned m = 0; m < o->n_methods; ++m) {
             const layout_score_t *s = &sc[(size_t)i * o->n_methods + m];
-            printf(", \"%s\": {", o->m[m]->name);
+            printf(", \"%s\": {", rp_pipe_layout_name(o->m[m]->layout));
             json_num("t", s->t, 1);
             json_num("r", s->r, 1);
             json_num("tx", s->tx, 1);
@@ -859,12 +862,14 @@ static void print_layout_table(const opts_t *o, const rp_sim_layout_t *lay, uint
            "  %u runs x %u frames per placement, seed %llu, %u thread%s; t = mean of |tx|,|ty|,"
            "|tz| (m), r = mean of |alpha|,|beta|,|gamma| (rad),\n"
            "  worst = the worst run's mean; * = the paper's placement\n\n",
-           n, o->layout_file ? o->layout_file : "built-in grid", o->m[0]->name, o->runs,
+           n, o->layout_file ? o->layout_file : "built-in grid",
+           rp_pipe_layout_name(o->m[0]->layout), o->runs,
            o->frames, (unsigned long long)o->seed, o->threads, o->threads == 1 ? "" : "s");
     printf("%-4s  %-22s %-29s %-29s", "rank", "placement", "  cam2: x       y       z  yaw",
            "  cam4: x       y       z  yaw");
     for (unsigned m = 0; m < o->n_methods; ++m) {
-        printf(" | %-6s%9s%9s%9s%9s", o->m[m]->name, "t", "r", "worst t", "worst r");
+        printf(" | %-6s%9s%9s%9s%9s", rp_pipe_layout_name(o->m[m]->layout), "t", "r", "worst t",
+               "worst r");
     }
     printf("\n");
     for (uint32_t k = 0; k < n; ++k) {
@@ -955,10 +960,9 @@ static void print_deviations(const opts_t *o)
 {
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine};
     for (unsigned i = 0; i < o->n_methods; ++i) {
-        rp_pipe_layout_t l;
+        const rp_pipe_layout_t l = o->m[i]->layout;
         rp_pipe_cfg_t cfg;
-        if (rp_pipe_layout_from_name(o->m[i]->name, &l) != RP_OK ||
-            rp_pipe_default_cfg(l, &cfg) != RP_OK) {
+        if (rp_pipe_default_cfg(l, &cfg) != RP_OK) {
             continue;
         }
         if (l == RP_PIPE_STEREO4 || l == RP_PIPE_STEREO2) {
