@@ -703,8 +703,14 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         return -1;
     }
     if (rp_pipe_layout_from_name(method, &layout) != RP_OK) {
+        char names[128];
+        size_t len = 0;
+        for (int l = 0; l < RP_PIPE_LAYOUT_COUNT_ && len < sizeof names; ++l) {
+            len += (size_t)snprintf(names + len, sizeof names - len, "%s%s", l ? ", " : "",
+                                    rp_pipe_layout_name((rp_pipe_layout_t)l));
+        }
         return fail(c, RP_CFG_E_RANGE, map_get(c, m, "method"), "estimator.method",
-                    "'%s' is not one of stereo4, stereo2, gc, cam1, cam2, cam3, cam4, rc", method);
+                    "'%s' is not one of %s", method, names);
     }
     rp_pipe_cfg_t *pc = &cfg->pipe;
     (void)rp_pipe_default_cfg(layout, pc);
