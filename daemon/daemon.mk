@@ -13,7 +13,7 @@ DMN_INC := -Icore/include -Iplatform/include -Iplatform/sim -Idaemon -I$(DMN_LCM
 DMN_WARN := $(WARN) -Wdouble-promotion -Wconversion -Wno-sign-conversion
 DMN_SRC := daemon/rigpose.c daemon/rp_args.c daemon/rp_est.c daemon/rp_publish.c daemon/rp_stats.c
 DMN_HDRS := $(wildcard core/include/rigpose/*.h platform/include/rigpose/*.h daemon/*.h \
-                       platform/sim/*.h)
+                       platform/sim/*.h host_tools/common/*.h)
 # The platform's library (platform/platform.mk): the HAL sources, the sim source and the
 # configuration parser; HAL_LIBS is what it links (libyaml, libpng, libjpeg).
 DMN_HAL_LIB = $(BUILD)/platform/librigpose_hal.a

@@ -70,8 +70,8 @@ static void on_signal(int sig)
 }
 
 /* The configured method: its name, and its code in the messages (pose_t.METHOD_*). */
-static const char *method_name(const rp_config_t *cfg) { return rp_method_name(cfg->method); }
-static int8_t method_code(const rp_config_t *cfg) { return (int8_t)cfg->method; }
+static const char *method_name(const rp_config_t *cfg) { return rp_pipe_layout_name(cfg->pipe.layout); }
+static int8_t method_code(const rp_config_t *cfg) { return (int8_t)cfg->pipe.layout; }
 
 /* ---- the camera source: every kind through the HAL ------------------------------------------- */
 

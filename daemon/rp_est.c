@@ -1,5 +1,6 @@
 /*
- * rp_est.c - the configured estimator: configuration -> rp_pipe (rp_est.h).
+ * rp_est.c - the configured estimator: configuration -> rp_pipe (rp_est.h). The pipeline's
+ * configuration is the parser's (rp_config.h: the core's defaults with the file's keys) as it is.
  */
 #include "rp_est.h"
 
@@ -10,22 +11,7 @@ rp_status_t rp_est_init(rp_est_t *est, const rp_config_t *cfg)
     if (est == NULL || cfg == NULL) {
         return RP_E_ARG;
     }
-    if (cfg->n_mono > RP_RC_MAX_CAMS) {
-        return RP_E_ARG;
-    }
-    rp_pipe_cfg_t pc;
-    const rp_status_t st = rp_pipe_default_cfg((rp_pipe_layout_t)cfg->method, &pc);
-    if (st != RP_OK) {
-        return st;
-    }
-    pc.track = cfg->track;
-    pc.stereo = cfg->stereo;
-    pc.gc = cfg->gc;
-    pc.mono = cfg->mono[0];
-    for (uint8_t i = 0; i < cfg->n_mono; ++i) {
-        pc.rc_cams[i] = cfg->mono[i].cam;
-    }
-    return rp_pipe_init(&est->pipe, &cfg->rig, &pc);
+    return rp_pipe_init(&est->pipe, &cfg->rig, &cfg->pipe);
 }
 
 rp_status_t rp_est_step(rp_est_t *est, const rp_frameset_t *fs, rp_estimate_t *out)

@@ -15,8 +15,8 @@ typedef struct {
     rp_pipe_t pipe; /* 4.1-4.4 MB at the default limits: keep an rp_est_t static */
 } rp_est_t;
 
-/* Set up est for cfg's method (layout), tracker, stereo, gc and mono settings on cfg's rig.
- * rp_pipe_init's status: RP_E_ARG for a method / camera choice the estimator refuses,
+/* Set up est on cfg's rig with cfg->pipe, unchanged (layout, cameras, tracker and estimator
+ * settings). rp_pipe_init's status: RP_E_ARG for a method / camera choice the estimator refuses,
  * rp_rig_check's errors. */
 rp_status_t rp_est_init(rp_est_t *est, const rp_config_t *cfg);
 

@@ -11,11 +11,16 @@
 
 /* The pose message's per-camera arrays hold RP_MAX_CAMS entries. */
 RP_STATIC_ASSERT(RP_MAX_CAMS == 6, "lcm_types: per-camera arrays are of 6");
-RP_STATIC_ASSERT((int)RP_METHOD_RC == (int)RP_PIPE_RC && (int)RP_METHOD_GC == (int)RP_PIPE_GC,
-                 "rp_method_t and rp_pipe_layout_t agree");
 /* The messages carry the core's codes as they are. */
-RP_STATIC_ASSERT(RIGPOSE_POSE_T_METHOD_RC == RP_METHOD_RC && RIGPOSE_POSE_T_METHOD_GC == RP_METHOD_GC,
-                 "pose_t.METHOD_* are rp_method_t");
+RP_STATIC_ASSERT(RIGPOSE_POSE_T_METHOD_STEREO4 == RP_PIPE_STEREO4 &&
+                     RIGPOSE_POSE_T_METHOD_STEREO2 == RP_PIPE_STEREO2 &&
+                     RIGPOSE_POSE_T_METHOD_GC == RP_PIPE_GC &&
+                     RIGPOSE_POSE_T_METHOD_CAM1 == RP_PIPE_CAM1 &&
+                     RIGPOSE_POSE_T_METHOD_CAM2 == RP_PIPE_CAM2 &&
+                     RIGPOSE_POSE_T_METHOD_CAM3 == RP_PIPE_CAM3 &&
+                     RIGPOSE_POSE_T_METHOD_CAM4 == RP_PIPE_CAM4 &&
+                     RIGPOSE_POSE_T_METHOD_RC == RP_PIPE_RC && RP_PIPE_LAYOUT_COUNT_ == 8,
+                 "pose_t.METHOD_* are rp_pipe_layout_t, all eight");
 RP_STATIC_ASSERT(RIGPOSE_POSE_T_FLAG_LOST == RP_EST_LOST &&
                      RIGPOSE_POSE_T_FLAG_SCALE_WEAK == RP_EST_SCALE_WEAK,
                  "pose_t.FLAG_* are RP_EST_*");

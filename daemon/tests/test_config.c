@@ -5,9 +5,11 @@
  * refused with its own status and a message "FILE:LINE: KEY: ..." naming the right line and key;
  * no truncation of a valid file crashes the parser.
  */
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "../../host_tools/common/rp_cfg_diff.h"
 #include "rigpose/rp_config.h"
 #include "rigpose/rp_rot.h"
 #include "rp_test.h"
@@ -76,10 +78,10 @@ static void test_base_file_is_valid(void **state)
     assert_int_equal(g_cfg.hal.kind, RP_HAL_SRC_V4L2);
     assert_int_equal(g_cfg.hal.timeout_ms, 500);
     assert_string_equal(g_cfg.hal.cam[1].device, "/dev/video1");
-    assert_int_equal(g_cfg.method, RP_METHOD_STEREO2);
-    assert_int_equal(g_cfg.stereo.n_pairs, 1);
-    assert_int_equal(g_cfg.stereo.pair_a[0], 0);
-    assert_int_equal(g_cfg.stereo.pair_b[0], 1);
+    assert_int_equal(g_cfg.pipe.layout, RP_PIPE_STEREO2);
+    assert_int_equal(g_cfg.pipe.stereo.n_pairs, 1);
+    assert_int_equal(g_cfg.pipe.stereo.pair_a[0], 0);
+    assert_int_equal(g_cfg.pipe.stereo.pair_b[0], 1);
     assert_near(g_cfg.rig.cam[1].D[0], 0.1, RP_TOL_TIGHT);
     assert_near(g_cfg.rig.cam[1].cam.k1, 0.1, RP_TOL_TIGHT);
     assert_near(g_cfg.rig.cam[1].cam.k2, -0.05, RP_TOL_TIGHT);
@@ -87,15 +89,15 @@ static void test_base_file_is_valid(void **state)
     assert_int_equal(g_cfg.hal.sync_tol_us, 5000);
     assert_int_equal(g_cfg.hal.retry_ms, 1000);
     assert_int_equal(g_cfg.hal.cam[0].fps, 30);
-    assert_near(g_cfg.stereo.ekf.sigma_px, 0.5, RP_TOL_TIGHT);
-    assert_int_equal(g_cfg.stereo.min_tracked, 50);
+    assert_near(g_cfg.pipe.stereo.ekf.sigma_px, 0.5, RP_TOL_TIGHT);
+    assert_int_equal(g_cfg.pipe.stereo.min_tracked, 50);
     assert_string_equal(g_cfg.lcm_url, "udpm://239.255.76.67:7667?ttl=0");
     assert_string_equal(g_cfg.pose_channel, "P");
     assert_string_equal(g_cfg.status_channel, "RIGPOSE_STATUS");
     assert_string_equal(g_cfg.image_channel, "");
     assert_int_equal(g_cfg.status_every, 1);
-    assert_int_equal(g_cfg.track.target, 150);
-    assert_int_equal(g_cfg.track.reset_q8, 205);
+    assert_int_equal(g_cfg.pipe.track.target, 150);
+    assert_int_equal(g_cfg.pipe.track.reset_q8, 205);
 }
 
 /* config/sim.yaml is the simulator's rig (rp_sim_make_rig) with stereo4 on its two pairs. */
@@ -125,12 +127,12 @@ static void test_embedded_default_is_the_simulated_rig(void **state)
     printf("config/sim.yaml vs rp_sim_make_rig: largest difference %.3g\n", worst);
     assert_true(worst < RP_TOL(1e-12, 1e-6));
     assert_int_equal(g_cfg.hal.kind, RP_HAL_SRC_SIM);
-    assert_int_equal(g_cfg.method, RP_METHOD_STEREO4);
-    assert_int_equal(g_cfg.stereo.n_pairs, 2);
-    assert_int_equal(g_cfg.stereo.pair_a[0], RP_SIM_CAM1);
-    assert_int_equal(g_cfg.stereo.pair_b[0], RP_SIM_CAM1B);
-    assert_int_equal(g_cfg.stereo.pair_a[1], RP_SIM_CAM3);
-    assert_int_equal(g_cfg.stereo.pair_b[1], RP_SIM_CAM3B);
+    assert_int_equal(g_cfg.pipe.layout, RP_PIPE_STEREO4);
+    assert_int_equal(g_cfg.pipe.stereo.n_pairs, 2);
+    assert_int_equal(g_cfg.pipe.stereo.pair_a[0], RP_SIM_CAM1);
+    assert_int_equal(g_cfg.pipe.stereo.pair_b[0], RP_SIM_CAM1B);
+    assert_int_equal(g_cfg.pipe.stereo.pair_a[1], RP_SIM_CAM3);
+    assert_int_equal(g_cfg.pipe.stereo.pair_b[1], RP_SIM_CAM3B);
     assert_int_equal(g_cfg.sim.drop_cam, -1);
     assert_near(g_cfg.sim.noise_px, 0.5, 1e-12);
 }
@@ -141,10 +143,10 @@ static void test_tracker_reset_share(void **state)
     (void)state;
     assert_int_equal(parse(edited(25, "  pose_channel: P\ntracker:\n  reset_share: 0.5")),
                      RP_CFG_OK);
-    assert_int_equal(g_cfg.track.reset_q8, 128);
+    assert_int_equal(g_cfg.pipe.track.reset_q8, 128);
     assert_int_equal(parse(edited(25, "  pose_channel: P\ntracker:\n  reset_share: 0")),
                      RP_CFG_OK);
-    assert_int_equal(g_cfg.track.reset_q8, 0);
+    assert_int_equal(g_cfg.pipe.track.reset_q8, 0);
 }
 
 /* estimator.metric_scale_sigma sets gc's metric scale step (0 turns it off). */
@@ -153,12 +155,12 @@ static void test_gc_metric_scale_sigma(void **state)
     (void)state;
     assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  metric_scale_sigma: 0")),
                      RP_CFG_OK);
-    assert_near(g_cfg.gc.mscale_sigma, 0.0, 0.0);
+    assert_near(g_cfg.pipe.gc.mscale_sigma, 0.0, 0.0);
     assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  metric_scale_sigma: 0.1")),
                      RP_CFG_OK);
-    assert_near(g_cfg.gc.mscale_sigma, 0.1, RP_TOL_TIGHT);
+    assert_near(g_cfg.pipe.gc.mscale_sigma, 0.1, RP_TOL_TIGHT);
     assert_int_equal(parse(edited(23, "  pairs: [[left, right]]")), RP_CFG_OK);
-    assert_near(g_cfg.gc.mscale_sigma, 0.3, RP_TOL_TIGHT);
+    assert_near(g_cfg.pipe.gc.mscale_sigma, 0.3, RP_TOL_TIGHT);
 }
 
 /* `angles` is the paper's R = Rz(gamma) Ry(beta) Rx(alpha). */
@@ -316,15 +318,15 @@ static void test_single_camera_methods(void **state)
     text[n] = '\0';
     char *m = strstr(text, "  method: stereo4");
     assert_non_null(m);
-    static const struct { const char *line; rp_method_t want; uint8_t cam0; } cases[] = {
-        {"  method: rc     ", RP_METHOD_RC, 0},
-        {"  method: cam3   ", RP_METHOD_CAM3, 2},
-        {"  method: gc     ", RP_METHOD_GC, 0},
+    static const struct { const char *line; rp_pipe_layout_t want; uint8_t cam0; } cases[] = {
+        {"  method: rc     ", RP_PIPE_RC, 0},
+        {"  method: cam3   ", RP_PIPE_CAM3, 2},
+        {"  method: gc     ", RP_PIPE_GC, 0},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         memcpy(m, cases[i].line, strlen(cases[i].line));
         const rp_cfg_status_t st = rp_config_parse(text, n, "sim.yaml", &g_cfg, g_err, sizeof g_err);
-        if (cases[i].want == RP_METHOD_GC) {
+        if (cases[i].want == RP_PIPE_GC) {
             /* gc needs its camera list: sim.yaml has only pairs. */
             assert_int_equal(st, RP_CFG_E_MISSING);
             assert_non_null(strstr(g_err, "estimator.cams: missing"));
@@ -333,11 +335,12 @@ static void test_single_camera_methods(void **state)
         if (st != RP_CFG_OK) {
             fail_msg("%s", g_err);
         }
-        assert_int_equal(g_cfg.method, cases[i].want);
-        assert_int_equal(g_cfg.mono[0].cam, cases[i].cam0);
-        if (cases[i].want == RP_METHOD_RC) {
-            assert_int_equal(g_cfg.n_mono, 4);
-            assert_int_equal(g_cfg.mono[3].cam, 3);
+        assert_int_equal(g_cfg.pipe.layout, cases[i].want);
+        if (cases[i].want == RP_PIPE_RC) {
+            assert_int_equal(g_cfg.pipe.rc_cams[0], cases[i].cam0);
+            assert_int_equal(g_cfg.pipe.rc_cams[3], 3);
+        } else {
+            assert_int_equal(g_cfg.pipe.mono.cam, cases[i].cam0);
         }
     }
 }
@@ -369,6 +372,332 @@ static void test_truncated_files_never_crash(void **state)
     assert_true(refused > 0);
 }
 
+/* ---- one source of defaults ------------------------------------------------------------- */
+
+/* config/sim.yaml (the paper's rig, cameras numbered as rp_pipe_default_cfg assumes) with its
+ * estimator mapping replaced by the least layout l accepts: the method and its cameras. */
+static const char *minimal_file(rp_pipe_layout_t l)
+{
+    static const char *const est[RP_PIPE_LAYOUT_COUNT_] = {
+        "estimator:\n  method: stereo4\n  pairs: [[cam1, cam1b], [cam3, cam3b]]\n",
+        "estimator:\n  method: stereo2\n  pairs: [[cam1, cam1b]]\n",
+        "estimator:\n  method: gc\n  cams: [cam1, cam2, cam3, cam4]\n",
+        "estimator:\n  method: cam1\n",
+        "estimator:\n  method: cam2\n",
+        "estimator:\n  method: cam3\n",
+        "estimator:\n  method: cam4\n",
+        "estimator:\n  method: rc\n"};
+    static char text[16384];
+    char file[16384];
+    FILE *f = fopen("config/sim.yaml", "rb");
+    assert_non_null(f);
+    const size_t n = fread(file, 1, sizeof file - 1, f);
+    fclose(f);
+    file[n] = '\0';
+    const char *a = strstr(file, "\nestimator:\n");
+    const char *b = a != NULL ? strstr(a, "\nlcm:\n") : NULL;
+    assert_non_null(b);
+    snprintf(text, sizeof text, "%.*s\n%s%s", (int)(a - file), file, est[l], b + 1);
+    return text;
+}
+
+/* Field by field over RP_PIPE_CFG_FIELDS (host_tools/common/rp_cfg_diff.h, the list the tools
+ * report their deviations with): a byte comparison of the whole struct would compare padding,
+ * which is not zero (the *_default_cfg return by value). */
+/* Fields of got that differ from want (printed); marks each field's bytes in covered[]. */
+static unsigned pipe_cfg_diff(const rp_pipe_cfg_t *got, const rp_pipe_cfg_t *want,
+                              const char *what, unsigned char *covered)
+{
+    unsigned n = 0;
+#define CMP_FIELD(f, use, kind)                                                                   \
+    if (memcmp(&got->f, &want->f, sizeof got->f) != 0) {                                         \
+        printf("%s: parsed %s differs from rp_pipe_default_cfg's\n", what, #f);                  \
+        ++n;                                                                                      \
+    }                                                                                             \
+    memset(covered + ((const unsigned char *)&got->f - (const unsigned char *)got), 1,           \
+           sizeof got->f);
+    RP_PIPE_CFG_FIELDS(CMP_FIELD)
+#undef CMP_FIELD
+    return n;
+}
+
+/* The must-show: for every layout a file that gives no estimator or tracker setting parses to
+ * exactly the core's rp_pipe_default_cfg of that layout (every field, bit for bit), and rp_est
+ * runs it as it is (daemon/tests/test_est.c). Fails if the parser, or anything between it and
+ * the core, sets a default of its own. */
+static void test_minimal_file_is_the_core_default_for_every_layout(void **state)
+{
+    (void)state;
+    for (int l = 0; l < RP_PIPE_LAYOUT_COUNT_; ++l) {
+        const char *t = minimal_file((rp_pipe_layout_t)l);
+        if (rp_config_parse(t, strlen(t), "minimal.yaml", &g_cfg, g_err, sizeof g_err) !=
+            RP_CFG_OK) {
+            fail_msg("%s: %s", rp_pipe_layout_name((rp_pipe_layout_t)l), g_err);
+        }
+        static rp_pipe_cfg_t def;
+        memset(&def, 0, sizeof def);
+        assert_ok(rp_pipe_default_cfg((rp_pipe_layout_t)l, &def));
+        static unsigned char covered[sizeof(rp_pipe_cfg_t)];
+        memset(covered, 0, sizeof covered);
+        const unsigned n = pipe_cfg_diff(&g_cfg.pipe, &def,
+                                         rp_pipe_layout_name((rp_pipe_layout_t)l), covered);
+        printf("%-8s minimal file == rp_pipe_default_cfg: %s\n",
+               rp_pipe_layout_name((rp_pipe_layout_t)l), n == 0 ? "yes, every field" : "NO");
+        assert_int_equal(n, 0);
+        /* RP_PIPE_CFG_FIELDS lists every field: what it leaves out can only be padding, shorter
+         * than the widest member (a field added to a configuration struct shows here) */
+        size_t run = 0;
+        for (size_t i = 0; i < sizeof covered; ++i) {
+            run = covered[i] ? 0 : run + 1;
+            if (run >= sizeof(rp_real)) {
+                fail_msg("rp_pipe_cfg_t bytes %zu..%zu are in no field of RP_PIPE_CFG_FIELDS "
+                         "(host_tools/common/rp_cfg_diff.h): a new field? add it there",
+                         i + 1 - run, i);
+            }
+        }
+    }
+}
+
+/* A key given overrides the core's default of every estimator that has it; a key not given
+ * keeps each estimator's own (stereo's plant noise 3, gc's 1). */
+static void test_a_key_given_overrides_only_itself(void **state)
+{
+    (void)state;
+    assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  q_trans: 2")), RP_CFG_OK);
+    assert_near(g_cfg.pipe.stereo.ekf.q_trans, 2.0, 0.0);
+    assert_near(g_cfg.pipe.gc.ekf.q_trans, 2.0, 0.0);
+    assert_near(g_cfg.pipe.mono.ekf.q_trans, 2.0, 0.0);
+    const rp_vo_stereo_cfg_t st = rp_vo_stereo_default_cfg();
+    const rp_vo_gc_cfg_t gc = rp_vo_gc_default_cfg();
+    assert_near(g_cfg.pipe.stereo.ekf.q_rot, st.ekf.q_rot, 0.0);
+    assert_near(g_cfg.pipe.gc.ekf.q_rot, gc.ekf.q_rot, 0.0);
+    assert_near(g_cfg.pipe.gc.init_depth_m, gc.init_depth_m, 0.0);
+    assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  init_on_sphere: true\n"
+                                      "  min_depth_m: 0.5")),
+                     RP_CFG_OK);
+    assert_int_equal(g_cfg.pipe.gc.init_on_sphere, 1);
+    assert_near(g_cfg.pipe.stereo.min_depth_m, 0.5, RP_TOL_TIGHT);
+    assert_near(g_cfg.pipe.stereo.max_depth_m, st.max_depth_m, 0.0);
+    /* a min_depth_m beyond the default max names min_depth_m */
+    assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  min_depth_m: 500")),
+                     RP_CFG_E_RANGE);
+    assert_non_null(strstr(g_err, "bad.yaml:24: estimator.min_depth_m: must be smaller"));
+    /* tracker keys the same way: target moves the top-up threshold with it */
+    assert_int_equal(parse(edited(25, "  pose_channel: P\ntracker:\n  target: 100")), RP_CFG_OK);
+    rp_track_cfg_t tc;
+    assert_ok(rp_track_default_cfg(&tc));
+    assert_int_equal(g_cfg.pipe.track.target, 100);
+    assert_int_equal(g_cfg.pipe.track.topup_below, 80);
+    assert_int_equal(g_cfg.pipe.track.win, tc.win);
+    assert_int_equal(g_cfg.pipe.track.reset_q8, tc.reset_q8);
+}
+
+/* The value(s) of setting `key` in p (the layout's estimator, or the tracker): 1, or 0 if the
+ * layout has no such setting. */
+static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
+{
+    const int st = p->layout == RP_PIPE_STEREO4 || p->layout == RP_PIPE_STEREO2;
+    const int gc = p->layout == RP_PIPE_GC;
+    const rp_ekf_params_t *e = st ? &p->stereo.ekf : gc ? &p->gc.ekf : &p->mono.ekf;
+    const rp_track_cfg_t *t = &p->track;
+#define IS(k) (strcmp(key, k) == 0)
+    v[1] = 0.0;
+    if (IS("sigma_px")) v[0] = (double)e->sigma_px;
+    else if (IS("q_trans")) v[0] = (double)e->q_trans;
+    else if (IS("q_rot")) v[0] = (double)e->q_rot;
+    else if (IS("gate_chi2")) v[0] = (double)e->gate_chi2;
+    else if (IS("iterations")) v[0] = e->iterations;
+    else if (IS("min_features")) v[0] = e->min_features;
+    else if (IS("min_tracked")) {
+        v[0] = st ? p->stereo.min_tracked : gc ? p->gc.min_tracked : p->mono.min_tracked;
+    } else if (IS("default_dt_s")) {
+        v[0] = (double)(st ? p->stereo.default_dt_s : gc ? p->gc.default_dt_s
+                                                         : p->mono.default_dt_s);
+    } else if (IS("max_epipolar_px") && st) v[0] = (double)p->stereo.max_epipolar_px;
+    else if (IS("min_depth_m") && st) v[0] = (double)p->stereo.min_depth_m;
+    else if (IS("max_depth_m") && st) v[0] = (double)p->stereo.max_depth_m;
+    else if (IS("max_reproj_px") && st) v[0] = (double)p->stereo.max_reproj_px;
+    else if (IS("refine_structure") && st) v[0] = p->stereo.refine_structure;
+    else if (IS("init_depth_m") && !st) {
+        v[0] = (double)(gc ? p->gc.init_depth_m : p->mono.init_depth_m);
+    } else if (IS("init_depth_sigma_m") && !st) {
+        v[0] = (double)(gc ? p->gc.init_depth_sigma_m : p->mono.init_depth_sigma_m);
+    } else if (IS("init_on_sphere") && gc) v[0] = p->gc.init_on_sphere;
+    else if (IS("metric_scale_sigma") && gc) v[0] = (double)p->gc.mscale_sigma;
+    else if (IS("target")) v[0] = t->target;
+    else if (IS("levels")) v[0] = t->levels;
+    else if (IS("win")) v[0] = t->win;
+    else if (IS("min_dist")) v[0] = t->min_dist;
+    else if (IS("fb_max_px")) v[0] = t->fb_max_q16 / 65536.0;
+    else if (IS("grid")) { v[0] = t->grid_x; v[1] = t->grid_y; }
+    else if (IS("reset_share")) v[0] = t->reset_q8 / 256.0;
+    else return 0;
+#undef IS
+    return 1;
+}
+
+/* Numbers of a README cell ("0.5", "true", "`[8, 6]`"): count (0: "—"), the values, and half a
+ * unit of the last digit written (an integer: float rounding only). */
+static int cell_values(const char *cell, double v[2], double tol[2])
+{
+    if (strcmp(cell, "—") == 0) {
+        return 0;
+    }
+    if (strcmp(cell, "true") == 0 || strcmp(cell, "false") == 0) {
+        v[0] = cell[0] == 't';
+        tol[0] = 0.0;
+        return 1;
+    }
+    int n = 0;
+    const char *s = cell;
+    while (*s != '\0' && n < 2) {
+        while (*s == '`' || *s == '[' || *s == ' ' || *s == ',') {
+            ++s;
+        }
+        char *end = NULL;
+        v[n] = strtod(s, &end);
+        if (end == s) {
+            return -1;
+        }
+        const char *dot = memchr(s, '.', (size_t)(end - s));
+        const int digits = dot != NULL ? (int)(end - dot - 1) : 0;
+        tol[n] = digits > 0 ? 0.5 * pow(10.0, -digits) : 1e-6 * fmax(1.0, fabs(v[n]));
+        ++n;
+        s = end;
+        while (*s == ']' || *s == '`') {
+            ++s;
+        }
+        if (*s != ',' && *s != '\0') {
+            return -1;
+        }
+    }
+    return n;
+}
+
+/* Cells of a table row "| a | b |", trimmed, into cell[] (max of them, CELL_MAX chars each);
+ * their count. */
+#define CELL_MAX 400
+static int row_cells(const char *line, char cell[][CELL_MAX], int max)
+{
+    int n = 0;
+    const char *s = strchr(line, '|');
+    while (s != NULL && n < max) {
+        const char *next = strchr(s + 1, '|');
+        if (next == NULL) {
+            break;
+        }
+        const char *c = s + 1, *e = next;
+        while (c < e && *c == ' ') {
+            ++c;
+        }
+        while (e > c && e[-1] == ' ') {
+            --e;
+        }
+        snprintf(cell[n++], CELL_MAX, "%.*s", (int)(e - c), c);
+        s = next;
+    }
+    return n;
+}
+
+/* config/README.md's table under the heading that starts with `heading`: every row's default
+ * (in column `col` of the header, for each layout `layouts` lists per column) must be what a
+ * file without the key parses to. Returns the rows checked. */
+static unsigned check_readme_table(const char *readme, const char *heading, int first_col,
+                                   int n_cols, const rp_pipe_layout_t layouts[][5],
+                                   const char *const header[])
+{
+    static rp_config_t cfgs[RP_PIPE_LAYOUT_COUNT_];
+    for (int l = 0; l < RP_PIPE_LAYOUT_COUNT_; ++l) {
+        const char *t = minimal_file((rp_pipe_layout_t)l);
+        assert_int_equal(rp_config_parse(t, strlen(t), "minimal.yaml", &cfgs[l], g_err,
+                                         sizeof g_err),
+                         RP_CFG_OK);
+    }
+    const char *h = strstr(readme, heading);
+    if (h == NULL) {
+        fail_msg("config/README.md: no heading '%s'", heading);
+    }
+    const char *s = strstr(h, "\n|");
+    assert_non_null(s);
+    ++s;
+    unsigned rows = 0, wrong = 0;
+    for (int line_no = 0; *s == '|'; ++line_no) {
+        const char *eol = strchr(s, '\n');
+        char line[1024];
+        snprintf(line, sizeof line, "%.*s", (int)(eol != NULL ? eol - s : (long)strlen(s)), s);
+        s = eol != NULL ? eol + 1 : s + strlen(s);
+        static char cell[12][CELL_MAX];
+        const int nc = row_cells(line, cell, 12);
+        if (line_no == 0) {
+            for (int k = 0; k < n_cols; ++k) {
+                assert_true(first_col + k < nc);
+                assert_string_equal(cell[first_col + k], header[k]);
+            }
+        } else if (line_no > 1) {
+            char key[CELL_MAX];
+            memcpy(key, cell[0][0] == '`' ? cell[0] + 1 : cell[0], CELL_MAX - 1);
+            key[CELL_MAX - 1] = '\0';
+            char *tick = strchr(key, '`');
+            if (tick != NULL) {
+                *tick = '\0';
+            }
+            for (int k = 0; k < n_cols; ++k) {
+                double want[2], tol[2];
+                const int nv = cell_values(cell[first_col + k], want, tol);
+                for (int j = 0; j < 5 && layouts[k][j] != RP_PIPE_LAYOUT_COUNT_; ++j) {
+                    const rp_pipe_layout_t l = layouts[k][j];
+                    double got[2];
+                    const int has = setting(key, &cfgs[l].pipe, got);
+                    int ok = nv >= 0 && has == (nv > 0);
+                    for (int i = 0; ok && i < nv; ++i) {
+                        ok = fabs(got[i] - want[i]) <= tol[i];
+                    }
+                    if (!ok) {
+                        printf("FAIL config/README.md %s, %s: README '%s', parsed %s%g\n", key,
+                               rp_pipe_layout_name(l), cell[first_col + k],
+                               has ? "" : "(no such setting) ", has ? got[0] : 0.0);
+                        ++wrong;
+                    }
+                }
+            }
+            ++rows;
+        }
+    }
+    assert_int_equal(wrong, 0);
+    return rows;
+}
+
+/* config/README.md lists each setting's default as the core defines it, for each layout. */
+static void test_readme_lists_the_core_defaults(void **state)
+{
+    (void)state;
+    static char readme[65536];
+    FILE *f = fopen("config/README.md", "rb");
+    assert_non_null(f);
+    const size_t n = fread(readme, 1, sizeof readme - 1, f);
+    fclose(f);
+    readme[n] = '\0';
+#define E RP_PIPE_LAYOUT_COUNT_ /* end of a list */
+    static const rp_pipe_layout_t est_layouts[3][5] = {
+        {RP_PIPE_STEREO4, RP_PIPE_STEREO2, E, E, E},
+        {RP_PIPE_GC, E, E, E, E},
+        {RP_PIPE_CAM1, RP_PIPE_CAM2, RP_PIPE_CAM3, RP_PIPE_CAM4, RP_PIPE_RC}};
+#undef E
+    static const char *const est_header[3] = {"stereo4, stereo2", "gc", "cam1..cam4, rc"};
+    const unsigned est_rows = check_readme_table(
+        readme, "#### `estimator` settings", 3, 3, est_layouts, est_header);
+    static const rp_pipe_layout_t trk_layouts[1][5] = {
+        {RP_PIPE_STEREO4, RP_PIPE_STEREO2, RP_PIPE_GC, RP_PIPE_CAM1, RP_PIPE_RC}};
+    static const char *const trk_header[1] = {"default"};
+    const unsigned trk_rows =
+        check_readme_table(readme, "### `tracker`", 3, 1, trk_layouts, trk_header);
+    printf("config/README.md: %u estimator and %u tracker defaults match the core's\n",
+           est_rows, trk_rows);
+    /* every setting the parser knows is listed (rp_config.c's keys but method, pairs, cams) */
+    assert_int_equal(est_rows, 17);
+    assert_int_equal(trk_rows, 7);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -382,6 +711,9 @@ int main(void)
         cmocka_unit_test(test_replay_index_is_relative_to_the_file),
         cmocka_unit_test(test_single_camera_methods),
         cmocka_unit_test(test_truncated_files_never_crash),
+        cmocka_unit_test(test_minimal_file_is_the_core_default_for_every_layout),
+        cmocka_unit_test(test_a_key_given_overrides_only_itself),
+        cmocka_unit_test(test_readme_lists_the_core_defaults),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

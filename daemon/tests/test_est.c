@@ -4,7 +4,8 @@
  * through rp_hal_open, the source's own checks through its typed API).
  *   - the sim source delivers frame sets in order with features, the truth and monotonic
  *     capture times; it ends after sim_frames sets; calls out of order are refused;
- *   - every method of the configuration file follows the simulated truth;
+ *   - every method of the configuration file follows the simulated truth, run with the parsed
+ *     configuration unchanged;
  *   - a camera dropped from frame K is flagged GONE | MISSING with no features and a growing
  *     drop count, and the estimator keeps tracking on the other cameras.
  */
@@ -74,32 +75,45 @@ static void test_sim_source_delivers_ordered_sets_then_ends(void **state)
     assert_int_equal(rp_hal_sim_open(NULL, &g_cfg.hal, NULL), RP_HAL_E_ARG);
 }
 
-/* Run `frames` sets of the sim through method m; mean abs translation / angle error over
+/* config/sim.yaml with its method and cameras replaced by layout m's (its other keys kept):
+ * the configuration the daemon runs for `--config` of that file. */
+static void load_default_as(rp_pipe_layout_t m)
+{
+    static const char *const est[RP_PIPE_LAYOUT_COUNT_] = {
+        "  method: stereo4\n  pairs: [[cam1, cam1b], [cam3, cam3b]]\n",
+        "  method: stereo2\n  pairs: [[cam1, cam1b]]\n",
+        "  method: gc\n  cams: [cam1, cam2, cam3, cam4]\n",
+        "  method: cam1\n", "  method: cam2\n", "  method: cam3\n", "  method: cam4\n",
+        "  method: rc\n"};
+    static char text[16384], out[16384];
+    FILE *f = fopen("config/sim.yaml", "rb");
+    assert_non_null(f);
+    const size_t n = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[n] = '\0';
+    char *a = strstr(text, "  method: stereo4");
+    char *b = a != NULL ? strstr(a, "  pairs: [[cam1, cam1b], [cam3, cam3b]]\n") : NULL;
+    assert_non_null(b);
+    b += strlen("  pairs: [[cam1, cam1b], [cam3, cam3b]]\n");
+    const int len = snprintf(out, sizeof out, "%.*s%s%s", (int)(a - text), text, est[m], b);
+    char err[RP_CFG_ERR_MAX];
+    if (rp_config_parse(out, (size_t)len, "config/sim.yaml", &g_cfg, err, sizeof err) !=
+        RP_CFG_OK) {
+        fail_msg("%s", err);
+    }
+    assert_int_equal(g_cfg.pipe.layout, m);
+}
+
+/* Run `frames` sets of the sim through layout m; mean abs translation / angle error over
  * sets 1.. . opts may drop a camera. Returns the count of sets with RP_EST_TRACKING. */
-static unsigned run_method(rp_method_t m, uint32_t frames, const rp_hal_sim_opts_t *opts,
+static unsigned run_method(rp_pipe_layout_t m, uint32_t frames, const rp_hal_sim_opts_t *opts,
                            double *et, double *er, unsigned *n_gone_sets)
 {
-    load_default();
-    g_cfg.method = m;
-    switch (m) {
-    case RP_METHOD_STEREO2: g_cfg.stereo.n_pairs = 1; break;
-    case RP_METHOD_GC:
-        g_cfg.gc.n_cams = 4;
-        for (uint8_t k = 0; k < 4; ++k) {
-            g_cfg.gc.cams[k] = k;
-        }
-        break;
-    case RP_METHOD_CAM1: g_cfg.n_mono = 1; g_cfg.mono[0].cam = 0; break;
-    case RP_METHOD_RC:
-        g_cfg.n_mono = 4;
-        for (uint8_t k = 0; k < 4; ++k) {
-            g_cfg.mono[k].cam = k;
-        }
-        break;
-    default: break;
-    }
+    load_default_as(m);
     g_cfg.hal.sim_frames = frames;
     assert_ok(rp_est_init(&g_est, &g_cfg));
+    /* rp_est runs the parsed configuration as it is: no setting of its own. */
+    assert_memory_equal(&g_est.pipe.cfg, &g_cfg.pipe, sizeof g_cfg.pipe);
     /* As the daemon opens it: through the HAL's table, the options in cfg.sim_opts. */
     rp_hal_cfg_t hc = g_cfg.hal;
     hc.sim_opts = opts;
@@ -139,14 +153,14 @@ static unsigned run_method(rp_method_t m, uint32_t frames, const rp_hal_sim_opts
 static void test_every_method_follows_the_simulated_truth(void **state)
 {
     (void)state;
-    static const struct { rp_method_t m; double max_t, max_r; } cases[] = {
+    static const struct { rp_pipe_layout_t m; double max_t, max_r; } cases[] = {
         /* Bounds: a tenth of the paper's Table 1 row for stereo4 / stereo2 (4 / 2 cameras), the
          * paper's own row for cam1 and RC, the "2 cameras" row for gc (its comparison). */
-        {RP_METHOD_STEREO4, 0.0021 / 10, 0.0015 / 10},
-        {RP_METHOD_STEREO2, 0.0132 / 10, 0.0137 / 10},
-        {RP_METHOD_GC, 0.0132, 0.0137},
-        {RP_METHOD_CAM1, 0.0337, 0.0260},
-        {RP_METHOD_RC, 0.0746, 0.0624},
+        {RP_PIPE_STEREO4, 0.0021 / 10, 0.0015 / 10},
+        {RP_PIPE_STEREO2, 0.0132 / 10, 0.0137 / 10},
+        {RP_PIPE_GC, 0.0132, 0.0137},
+        {RP_PIPE_CAM1, 0.0337, 0.0260},
+        {RP_PIPE_RC, 0.0746, 0.0624},
     };
     const uint32_t frames = 30;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
@@ -154,7 +168,7 @@ static void test_every_method_follows_the_simulated_truth(void **state)
         unsigned gone;
         const unsigned tracking = run_method(cases[i].m, frames, NULL, &et, &er, &gone);
         printf("%-8s %u sets: mean abs error %.6f m, %.6f rad; tracking in %u\n",
-               rp_method_name(cases[i].m), frames, et, er, tracking);
+               rp_pipe_layout_name(cases[i].m), frames, et, er, tracking);
         assert_true(tracking >= frames - 2);
         assert_true(et < cases[i].max_t);
         assert_true(er < cases[i].max_r);
@@ -170,7 +184,7 @@ static void test_a_vanished_camera_is_flagged_and_tracking_goes_on(void **state)
     o.drop_from = 10;
     double et, er;
     unsigned gone;
-    const unsigned tracking = run_method(RP_METHOD_STEREO4, 30, &o, &et, &er, &gone);
+    const unsigned tracking = run_method(RP_PIPE_STEREO4, 30, &o, &et, &er, &gone);
     printf("stereo4 with cam3 gone from set 10: %u sets flagged gone, error %.6f m, %.6f rad, "
            "tracking in %u of 30\n", gone, et, er, tracking);
     assert_int_equal(gone, 20);

@@ -16,7 +16,7 @@ int main(int argc, char **argv)
         const rp_cfg_status_t s = rp_config_load(argv[i], &cfg, err, sizeof err);
         if (s == RP_CFG_OK) {
             printf("%s: ok (%u cameras, method %s)\n", argv[i], (unsigned)cfg.rig.n_cams,
-                   rp_method_name(cfg.method));
+                   rp_pipe_layout_name(cfg.pipe.layout));
         } else {
             printf("%s\n", err);
             bad = 1;

@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "rigpose/rp_pipe.h"
 #include "rigpose/rp_rot.h"
 #include "rigpose_pose_t.h"
 
@@ -68,7 +69,6 @@ static bool load_lcm(const std::string &path, const std::string &channel, Traj *
         *why = path + ": cannot open the LCM log";
         return false;
     }
-    static const char *names[] = {"stereo4", "stereo2", "gc", "cam1", "cam2", "cam3", "cam4", "rc"};
     int64_t n_bad = 0, n_other = 0;
     while (lcm_eventlog_event_t *ev = lcm_eventlog_read_next_event(log)) {
         if (channel != ev->channel) {
@@ -95,8 +95,8 @@ static bool load_lcm(const std::string &path, const std::string &channel, Traj *
             g.R = rot_from_angles(cv::Vec3d(m.truth[3], m.truth[4], m.truth[5]));
             truth->push_back(g);
         }
-        if (method && m.method >= 0 && m.method < 8) {
-            *method = names[m.method];
+        if (method && m.method >= 0 && m.method < RP_PIPE_LAYOUT_COUNT_) {
+            *method = rp_pipe_layout_name(static_cast<rp_pipe_layout_t>(m.method));
         }
         rigpose_pose_t_decode_cleanup(&m);
         lcm_eventlog_free_event(ev);

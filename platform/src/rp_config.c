@@ -9,6 +9,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,15 +30,6 @@ const char *rp_cfg_status_str(rp_cfg_status_t s)
     case RP_CFG_E_UNKNOWN: return "unknown key";
     }
     return "unknown status";
-}
-
-static const char *const method_names[] = {"stereo4", "stereo2", "gc", "cam1",
-                                           "cam2",    "cam3",    "cam4", "rc"};
-#define N_METHODS (sizeof method_names / sizeof method_names[0])
-
-const char *rp_method_name(rp_method_t m)
-{
-    return (unsigned)m < N_METHODS ? method_names[m] : "?";
 }
 
 /* ---- context and error reporting ----------------------------------------------------------- */
@@ -626,6 +618,74 @@ static int name_list(ctx_t *c, const rp_config_t *cfg, const yaml_node_t *s, con
     return 0;
 }
 
+/* The estimator's keys with one value each: every one overrides, where the file gives it, the
+ * fields of the core's default configuration it names (the same setting of the stereo, gc and
+ * mono estimators; only the layout's own estimator runs). No defaults here: absent keys keep
+ * rp_pipe_default_cfg's values. */
+typedef enum { K_REAL, K_U8, K_U16, K_BOOL } key_type_t;
+typedef struct {
+    const char *key;
+    key_type_t type;
+    double lo, hi;    /* range; integers and numbers */
+    uint8_t lo_open;  /* numbers: lo excluded */
+    uint8_t n;        /* fields set */
+    size_t off[3];    /* offsets of the fields in rp_pipe_cfg_t */
+} est_key_t;
+
+#define F(member) offsetof(rp_pipe_cfg_t, member)
+#define ALL3(member) 3, {F(stereo.member), F(gc.member), F(mono.member)}
+static const est_key_t est_keys[] = {
+    {"sigma_px", K_REAL, 0.0, 100.0, 1, ALL3(ekf.sigma_px)},
+    {"q_trans", K_REAL, 0.0, 1e6, 0, ALL3(ekf.q_trans)},
+    {"q_rot", K_REAL, 0.0, 1e6, 0, ALL3(ekf.q_rot)},
+    {"gate_chi2", K_REAL, -1e6, 1e6, 0, ALL3(ekf.gate_chi2)},
+    {"iterations", K_U8, 1, 20, 0, ALL3(ekf.iterations)},
+    {"min_features", K_U16, 3, RP_MAX_FEATS_PER_CAM, 0, ALL3(ekf.min_features)},
+    {"min_tracked", K_U16, 6, RP_MAX_FEATS_PER_CAM, 0, ALL3(min_tracked)},
+    {"default_dt_s", K_REAL, 0.0, 10.0, 1, ALL3(default_dt_s)},
+    {"max_epipolar_px", K_REAL, 0.0, 100.0, 1, 1, {F(stereo.max_epipolar_px)}},
+    {"min_depth_m", K_REAL, 0.0, 1e6, 1, 1, {F(stereo.min_depth_m)}},
+    {"max_depth_m", K_REAL, 0.0, 1e6, 1, 1, {F(stereo.max_depth_m)}},
+    {"max_reproj_px", K_REAL, 0.0, 100.0, 1, 1, {F(stereo.max_reproj_px)}},
+    {"refine_structure", K_BOOL, 0, 1, 0, 1, {F(stereo.refine_structure)}},
+    {"init_depth_m", K_REAL, 0.0, 1e4, 1, 2, {F(gc.init_depth_m), F(mono.init_depth_m)}},
+    {"init_depth_sigma_m", K_REAL, 0.0, 1e4, 1, 2,
+     {F(gc.init_depth_sigma_m), F(mono.init_depth_sigma_m)}},
+    {"init_on_sphere", K_BOOL, 0, 1, 0, 1, {F(gc.init_on_sphere)}},
+    {"metric_scale_sigma", K_REAL, 0.0, 10.0, 0, 1, {F(gc.mscale_sigma)}},
+};
+#undef ALL3
+#undef F
+#define N_EST_KEYS (sizeof est_keys / sizeof est_keys[0])
+
+/* Key k of mapping m, if given, into its fields of pipe. */
+static int set_est_key(ctx_t *c, const yaml_node_t *m, const char *P, const est_key_t *k,
+                       rp_pipe_cfg_t *pipe)
+{
+    if (map_get(c, m, k->key) == NULL) {
+        return 0;
+    }
+    double v = 0.0;
+    long long i = 0;
+    uint8_t b = 0;
+    if ((k->type == K_REAL && get_num(c, m, P, k->key, 1, 0.0, k->lo, k->lo_open, k->hi, &v)) ||
+        ((k->type == K_U8 || k->type == K_U16) &&
+         get_int(c, m, P, k->key, 1, 0, (long long)k->lo, (long long)k->hi, &i)) ||
+        (k->type == K_BOOL && get_bool(c, m, P, k->key, 0, &b))) {
+        return -1;
+    }
+    for (uint8_t f = 0; f < k->n; ++f) {
+        unsigned char *at = (unsigned char *)pipe + k->off[f];
+        switch (k->type) {
+        case K_REAL: *(rp_real *)(void *)at = (rp_real)v; break;
+        case K_U8: *at = (uint8_t)i; break;
+        case K_U16: *(uint16_t *)(void *)at = (uint16_t)i; break;
+        case K_BOOL: *at = b; break;
+        }
+    }
+    return 0;
+}
+
 static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 {
     static const char *const known[] = {
@@ -637,83 +697,36 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     const char *P = "estimator";
     yaml_node_t *m;
     char method[16];
-    double sigma, qt, qr, gate, epi, dmin, dmax, reproj, idep, isig, dt, msig;
-    long long iters, minf, mint;
-    uint8_t refine, sphere;
+    rp_pipe_layout_t layout;
     if (get_map(c, root, "", "estimator", 1, &m) || check_keys(c, m, P, known) ||
-        get_str(c, m, P, "method", 1, "", 0, method, sizeof method) ||
-        get_num(c, m, P, "sigma_px", 0, 0.5, 0.0, 1, 100.0, &sigma) ||
-        get_num(c, m, P, "q_trans", 0, 1.0, 0.0, 0, 1e6, &qt) ||
-        get_num(c, m, P, "q_rot", 0, 1.0, 0.0, 0, 1e6, &qr) ||
-        get_num(c, m, P, "gate_chi2", 0, 13.8, -1e6, 0, 1e6, &gate) ||
-        get_int(c, m, P, "iterations", 0, 3, 1, 20, &iters) ||
-        get_int(c, m, P, "min_features", 0, 6, 3, RP_MAX_FEATS_PER_CAM, &minf) ||
-        get_int(c, m, P, "min_tracked", 0, 50, 6, RP_MAX_FEATS_PER_CAM, &mint) ||
-        get_num(c, m, P, "max_epipolar_px", 0, 1.5, 0.0, 1, 100.0, &epi) ||
-        get_num(c, m, P, "min_depth_m", 0, 0.05, 0.0, 1, 1e6, &dmin) ||
-        get_num(c, m, P, "max_depth_m", 0, 100.0, 0.0, 1, 1e6, &dmax) ||
-        get_num(c, m, P, "max_reproj_px", 0, 1.5, 0.0, 1, 100.0, &reproj) ||
-        get_bool(c, m, P, "refine_structure", 1, &refine) ||
-        get_num(c, m, P, "init_depth_m", 0, 0.8335, 0.0, 1, 1e4, &idep) ||
-        get_num(c, m, P, "init_depth_sigma_m", 0, 0.15, 0.0, 1, 1e4, &isig) ||
-        get_bool(c, m, P, "init_on_sphere", 1, &sphere) ||
-        get_num(c, m, P, "default_dt_s", 0, 1.0 / 30.0, 0.0, 1, 10.0, &dt) ||
-        get_num(c, m, P, "metric_scale_sigma", 0, 0.3, 0.0, 0, 10.0, &msig)) {
+        get_str(c, m, P, "method", 1, "", 0, method, sizeof method)) {
         return -1;
     }
-    int mi = -1;
-    for (size_t k = 0; k < N_METHODS; ++k) {
-        if (strcmp(method, method_names[k]) == 0) {
-            mi = (int)k;
+    if (rp_pipe_layout_from_name(method, &layout) != RP_OK) {
+        char names[128];
+        size_t len = 0;
+        for (int l = 0; l < RP_PIPE_LAYOUT_COUNT_ && len < sizeof names; ++l) {
+            len += (size_t)snprintf(names + len, sizeof names - len, "%s%s", l ? ", " : "",
+                                    rp_pipe_layout_name((rp_pipe_layout_t)l));
+        }
+        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "method"), "estimator.method",
+                    "'%s' is not one of %s", method, names);
+    }
+    rp_pipe_cfg_t *pc = &cfg->pipe;
+    (void)rp_pipe_default_cfg(layout, pc);
+    for (size_t k = 0; k < N_EST_KEYS; ++k) {
+        if (set_est_key(c, m, P, &est_keys[k], pc) != 0) {
+            return -1;
         }
     }
-    if (mi < 0) {
-        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "method"), "estimator.method",
-                    "'%s' is not one of stereo4, stereo2, gc, cam1, cam2, cam3, cam4, rc", method);
-    }
-    if (dmin >= dmax) {
-        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "max_depth_m"), "estimator.max_depth_m",
-                    "must be larger than min_depth_m (%g)", dmin);
-    }
-    cfg->method = (rp_method_t)mi;
-
-    rp_ekf_params_t ekf = rp_ekf_default_params();
-    ekf.sigma_px = (rp_real)sigma;
-    ekf.q_trans = (rp_real)qt;
-    ekf.q_rot = (rp_real)qr;
-    ekf.gate_chi2 = (rp_real)gate;
-    ekf.iterations = (uint8_t)iters;
-    ekf.min_features = (uint16_t)minf;
-
-    rp_vo_stereo_cfg_t *st = &cfg->stereo;
-    *st = rp_vo_stereo_default_cfg();
-    st->ekf = ekf;
-    st->min_tracked = (uint16_t)mint;
-    st->max_epipolar_px = (rp_real)epi;
-    st->min_depth_m = (rp_real)dmin;
-    st->max_depth_m = (rp_real)dmax;
-    st->max_reproj_px = (rp_real)reproj;
-    st->default_dt_s = (rp_real)dt;
-    st->refine_structure = refine;
-
-    rp_vo_gc_cfg_t *gc = &cfg->gc;
-    *gc = rp_vo_gc_default_cfg();
-    gc->ekf = ekf;
-    gc->min_tracked = (uint16_t)mint;
-    gc->init_depth_m = (rp_real)idep;
-    gc->init_depth_sigma_m = (rp_real)isig;
-    gc->init_on_sphere = sphere;
-    gc->default_dt_s = (rp_real)dt;
-    gc->mscale_sigma = (rp_real)msig;
-
-    for (int k = 0; k < 4; ++k) {
-        rp_vo_mono_cfg_t *mo = &cfg->mono[k];
-        *mo = rp_vo_mono_default_cfg();
-        mo->ekf = ekf;
-        mo->min_tracked = (uint16_t)mint;
-        mo->init_depth_m = (rp_real)idep;
-        mo->init_depth_sigma_m = (rp_real)isig;
-        mo->default_dt_s = (rp_real)dt;
+    if (pc->stereo.min_depth_m >= pc->stereo.max_depth_m) {
+        const yaml_node_t *at = map_get(c, m, "max_depth_m");
+        return at != NULL ? fail(c, RP_CFG_E_RANGE, at, "estimator.max_depth_m",
+                                 "must be larger than min_depth_m (%g)",
+                                 (double)pc->stereo.min_depth_m)
+                          : fail(c, RP_CFG_E_RANGE, map_get(c, m, "min_depth_m"),
+                                 "estimator.min_depth_m", "must be smaller than max_depth_m (%g)",
+                                 (double)pc->stereo.max_depth_m);
     }
 
     uint8_t taken[RP_MAX_CAMS] = {0};
@@ -721,8 +734,9 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     size_t n = 0;
     const yaml_node_t *pairs = map_get(c, m, "pairs");
     const yaml_node_t *cams = map_get(c, m, "cams");
-    if (cfg->method == RP_METHOD_STEREO4 || cfg->method == RP_METHOD_STEREO2) {
-        const size_t want = cfg->method == RP_METHOD_STEREO4 ? 2 : 1;
+    const int stereo = layout == RP_PIPE_STEREO4 || layout == RP_PIPE_STEREO2;
+    if (stereo) {
+        const size_t want = pc->stereo.n_pairs;
         if (pairs == NULL) {
             return fail(c, RP_CFG_E_MISSING, m, "estimator.pairs",
                         "missing (method %s needs %zu stereo pair%s)", method, want,
@@ -733,7 +747,6 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
             return fail(c, RP_CFG_E_TYPE, pairs, "estimator.pairs",
                         "expected a list of %zu pair%s [left, right]", want, want > 1 ? "s" : "");
         }
-        st->n_pairs = (uint8_t)want;
         for (size_t p = 0; p < want; ++p) {
             char kp[KEY_MAX];
             snprintf(kp, sizeof kp, "estimator.pairs[%zu]", p);
@@ -741,10 +754,10 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
                           &n, taken) != 0) {
                 return -1;
             }
-            st->pair_a[p] = idx[0];
-            st->pair_b[p] = idx[1];
+            pc->stereo.pair_a[p] = idx[0];
+            pc->stereo.pair_b[p] = idx[1];
         }
-    } else if (cfg->method == RP_METHOD_GC) {
+    } else if (layout == RP_PIPE_GC) {
         if (cams == NULL) {
             return fail(c, RP_CFG_E_MISSING, m, "estimator.cams",
                         "missing (method gc needs its list of single cameras)");
@@ -752,13 +765,14 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         if (name_list(c, cfg, cams, "estimator.cams", 1, RP_MAX_CAMS, idx, &n, taken) != 0) {
             return -1;
         }
-        gc->n_cams = (uint8_t)n;
-        memcpy(gc->cams, idx, n);
+        memset(pc->gc.cams, 0, sizeof pc->gc.cams);
+        pc->gc.n_cams = (uint8_t)n;
+        memcpy(pc->gc.cams, idx, n);
     } else {
         /* cam1..cam4 and rc: by default the cameras named cam1..cam4. */
         static const char *const defaults[4] = {"cam1", "cam2", "cam3", "cam4"};
-        const size_t want = cfg->method == RP_METHOD_RC ? 4 : 1;
-        const size_t first = cfg->method == RP_METHOD_RC ? 0 : (size_t)(cfg->method - RP_METHOD_CAM1);
+        const size_t want = layout == RP_PIPE_RC ? RP_RC_MAX_CAMS : 1;
+        const size_t first = layout == RP_PIPE_RC ? 0 : (size_t)(layout - RP_PIPE_CAM1);
         if (cams != NULL) {
             if (name_list(c, cfg, cams, "estimator.cams", want, want, idx, &n, taken) != 0) {
                 return -1;
@@ -779,25 +793,26 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
                 }
             }
         }
-        cfg->n_mono = (uint8_t)want;
-        for (size_t k = 0; k < want; ++k) {
-            cfg->mono[k].cam = idx[k];
+        if (layout == RP_PIPE_RC) {
+            memcpy(pc->rc_cams, idx, want);
+        } else {
+            pc->mono.cam = idx[0];
         }
     }
-    const int stereo = cfg->method == RP_METHOD_STEREO4 || cfg->method == RP_METHOD_STEREO2;
     cfg->hal.sim_layout = (uint8_t)(stereo ? 0 : 1);
     return 0;
 }
 
 /* ---- tracker, lcm ---------------------------------------------------------------------------- */
 
+/* The tracker's keys override, where given, the core's defaults in cfg->pipe.track (set with
+ * the layout by parse_estimator). */
 static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 {
     static const char *const known[] = {"target", "levels", "win", "min_dist",
                                         "fb_max_px", "grid", "reset_share", NULL};
     const char *P = "tracker";
-    rp_track_cfg_t *t = &cfg->track;
-    (void)rp_track_default_cfg(t);
+    rp_track_cfg_t *t = &cfg->pipe.track;
     yaml_node_t *m;
     if (get_map(c, root, "", "tracker", 0, &m) != 0) {
         return -1;
@@ -805,36 +820,64 @@ static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     if (m == NULL) {
         return 0;
     }
-    long long target, levels, win, mind;
-    double fb, reset, grid[2] = {t->grid_x, t->grid_y};
+    long long v;
+    double x, grid[2];
     int present;
-    if (check_keys(c, m, P, known) ||
-        get_int(c, m, P, "target", 0, t->target, 8, RP_MAX_FEATS_PER_CAM, &target) ||
-        get_int(c, m, P, "levels", 0, t->levels, 1, RP_TRACK_MAX_LEVELS, &levels) ||
-        get_int(c, m, P, "win", 0, t->win, 5, RP_TRACK_MAX_WIN, &win) ||
-        get_int(c, m, P, "min_dist", 0, t->min_dist, 1, 1000, &mind) ||
-        get_num(c, m, P, "fb_max_px", 0, (double)t->fb_max_q16 / 65536.0, 0.0, 0, 100.0, &fb) ||
-        get_nums(c, m, P, "grid", 0, 2, grid, &present) ||
-        get_num(c, m, P, "reset_share", 0, t->reset_q8 / 256.0, 0.0, 0, 0.99, &reset)) {
+    if (check_keys(c, m, P, known)) {
         return -1;
     }
-    if ((win & 1) == 0) {
-        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "win"), "tracker.win", "%lld is even", win);
+    if (map_get(c, m, "target") != NULL) {
+        if (get_int(c, m, P, "target", 1, 0, 8, RP_MAX_FEATS_PER_CAM, &v)) {
+            return -1;
+        }
+        t->target = (uint16_t)v;
+        t->topup_below = (uint16_t)(t->target * 4 / 5); /* rp_track_default_cfg's share */
     }
-    if (grid[0] < 1 || grid[1] < 1 || grid[0] != floor(grid[0]) || grid[1] != floor(grid[1]) ||
-        grid[0] * grid[1] > RP_TRACK_MAX_CELLS) {
-        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "grid"), "tracker.grid",
-                    "two positive integers with a product <= %d", RP_TRACK_MAX_CELLS);
+    if (map_get(c, m, "levels") != NULL) {
+        if (get_int(c, m, P, "levels", 1, 0, 1, RP_TRACK_MAX_LEVELS, &v)) {
+            return -1;
+        }
+        t->levels = (uint8_t)v;
     }
-    t->target = (uint16_t)target;
-    t->topup_below = (uint16_t)(t->target * 4 / 5);
-    t->levels = (uint8_t)levels;
-    t->win = (uint8_t)win;
-    t->min_dist = (uint16_t)mind;
-    t->fb_max_q16 = (uint32_t)lround(fb * 65536.0);
-    t->grid_x = (uint8_t)grid[0];
-    t->grid_y = (uint8_t)grid[1];
-    t->reset_q8 = (uint8_t)lround(reset * 256.0);
+    if (map_get(c, m, "win") != NULL) {
+        if (get_int(c, m, P, "win", 1, 0, 5, RP_TRACK_MAX_WIN, &v)) {
+            return -1;
+        }
+        if ((v & 1) == 0) {
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "win"), "tracker.win", "%lld is even", v);
+        }
+        t->win = (uint8_t)v;
+    }
+    if (map_get(c, m, "min_dist") != NULL) {
+        if (get_int(c, m, P, "min_dist", 1, 0, 1, 1000, &v)) {
+            return -1;
+        }
+        t->min_dist = (uint16_t)v;
+    }
+    if (map_get(c, m, "fb_max_px") != NULL) {
+        if (get_num(c, m, P, "fb_max_px", 1, 0.0, 0.0, 0, 100.0, &x)) {
+            return -1;
+        }
+        t->fb_max_q16 = (uint32_t)lround(x * 65536.0);
+    }
+    if (get_nums(c, m, P, "grid", 0, 2, grid, &present)) {
+        return -1;
+    }
+    if (present) {
+        if (grid[0] < 1 || grid[1] < 1 || grid[0] != floor(grid[0]) ||
+            grid[1] != floor(grid[1]) || grid[0] * grid[1] > RP_TRACK_MAX_CELLS) {
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "grid"), "tracker.grid",
+                        "two positive integers with a product <= %d", RP_TRACK_MAX_CELLS);
+        }
+        t->grid_x = (uint8_t)grid[0];
+        t->grid_y = (uint8_t)grid[1];
+    }
+    if (map_get(c, m, "reset_share") != NULL) {
+        if (get_num(c, m, P, "reset_share", 1, 0.0, 0.0, 0, 0.99, &x)) {
+            return -1;
+        }
+        t->reset_q8 = (uint8_t)lround(x * 256.0);
+    }
     return 0;
 }
 

@@ -59,15 +59,19 @@ extern "C" {
 RP_STATIC_ASSERT(RP_PIPE_MAX_TRACKERS >= 2 && RP_PIPE_MAX_TRACKERS <= RP_MAX_CAMS,
                  "RP_PIPE_MAX_TRACKERS: 2..RP_MAX_CAMS");
 
+/* The layouts: the one list of them (the configuration file's estimator.method, the tools'
+ * --methods, the daemon). The values are rigpose.pose_t's METHOD_* constants
+ * (lcm_types/rigpose_pose_t.lcm), which the daemon checks at compile time; names as
+ * rp_pipe_layout_name gives them. */
 typedef enum {
     RP_PIPE_STEREO4 = 0,
-    RP_PIPE_STEREO2,
-    RP_PIPE_GC,
-    RP_PIPE_CAM1,
-    RP_PIPE_CAM2,
-    RP_PIPE_CAM3,
-    RP_PIPE_CAM4,
-    RP_PIPE_RC,
+    RP_PIPE_STEREO2 = 1,
+    RP_PIPE_GC = 2,
+    RP_PIPE_CAM1 = 3,
+    RP_PIPE_CAM2 = 4,
+    RP_PIPE_CAM3 = 5,
+    RP_PIPE_CAM4 = 6,
+    RP_PIPE_RC = 7,
     RP_PIPE_LAYOUT_COUNT_ /* number of layouts; not a layout */
 } rp_pipe_layout_t;
 
@@ -147,8 +151,8 @@ rp_status_t rp_pipe_layout_from_name(const char *name, rp_pipe_layout_t *layout)
 
 /* Defaults for layout on the paper's rig as rigpose-sim numbers its cameras (0 cam1, 1 cam2,
  * 2 cam3, 3 cam4, 4 cam1's stereo partner, 5 cam3's): pairs (0,4) and (2,5); gc and rc over
- * 0..3; camK over camera K-1. Every component's own defaults otherwise, except the stereo
- * EKF's plant noise: q_trans = q_rot = 3 (rp_pipe.c says why). A rig numbered
+ * 0..3; camK over camera K-1. Every other field is its component's *_default_cfg, unchanged
+ * (the one source of defaults: config/README.md lists them per layout). A rig numbered
  * differently (e.g. a KITTI pair: 0 left, 1 right) sets the camera fields after this call.
  * RP_E_ARG: NULL or bad layout. */
 rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg);

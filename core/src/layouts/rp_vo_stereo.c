@@ -18,6 +18,8 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     rp_vo_stereo_cfg_t c;
     memset(&c, 0, sizeof(c));
     c.ekf = rp_ekf_default_params();
+    c.ekf.q_trans = RP_C(3.0); /* config/README.md, "Defaults that are measured" */
+    c.ekf.q_rot = RP_C(3.0);
     c.min_tracked = 50;
     c.max_epipolar_px = RP_C(1.5);
     c.min_depth_m = RP_C(0.05);

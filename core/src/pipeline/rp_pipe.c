@@ -53,19 +53,14 @@ rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg)
     (void)rp_track_default_cfg(&cfg->track);
     (void)rp_smatch_default_cfg(&cfg->smatch);
     cfg->stereo = rp_vo_stereo_default_cfg();
-    /* Plant noise 3x the estimator's default. On rendered frames of the paper's random motion
-     * (tests/bench_pipe.c, 100 frames) the default (1 m^2/s^3, 1 rad^2/s^3) let the Mahalanobis
-     * gate reject a whole pair's landmarks after a sudden change of direction (stereo4 tx
-     * error 9 mm at 320x240); at 3, 10 or 30 it stays at 3e-5 m. Feature-level simulation,
-     * with several times more features per camera, does not show it. */
-    cfg->stereo.ekf.q_trans = RP_C(3.0);
-    cfg->stereo.ekf.q_rot = RP_C(3.0);
     cfg->stereo.n_pairs = layout == RP_PIPE_STEREO4 ? 2 : 1;
     cfg->stereo.pair_a[0] = 0; /* cam1 */
     cfg->stereo.pair_b[0] = 4; /* cam1's partner */
 #if RP_MAX_PAIRS > 1
-    cfg->stereo.pair_a[1] = 2; /* cam3 */
-    cfg->stereo.pair_b[1] = 5; /* cam3's partner */
+    if (layout == RP_PIPE_STEREO4) { /* stereo2's unused second pair stays 0 */
+        cfg->stereo.pair_a[1] = 2;   /* cam3 */
+        cfg->stereo.pair_b[1] = 5;   /* cam3's partner */
+    }
 #endif
     cfg->gc = rp_vo_gc_default_cfg();
     cfg->gc.n_cams = 4;

@@ -21,6 +21,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "../../common/rp_cfg_diff.h"
 #include "img_fixture.h"
 #include "rigpose/rp_pipe.h"
 #include "rigpose/rp_rot.h"
@@ -110,6 +111,13 @@ static result_t run_size(uint16_t w, uint16_t h, double f, int n_frames, uint64_
         cfg.gc.init_depth_m = RP_C(1.2); /* the room's typical range */
         cfg.gc.init_depth_sigma_m = RP_C(0.3);
         cfg.gc.init_on_sphere = 1;
+        static int said[2];
+        if (!said[m]) {
+            static const char *const why[][2] = {
+                {"gc.init_", "the rendered room's typical range, along the ray"}, {NULL, NULL}};
+            (void)rp_cfg_diff_print(stderr, "bench_pipe", &cfg, why);
+            said[m] = 1;
+        }
         if (rp_pipe_init(&pipes[m], &rig, &cfg) != RP_OK) {
             fprintf(stderr, "bench_pipe: rp_pipe_init failed\n");
             exit(1);

@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../../common/rp_cfg_diff.h"
 #include "bt_scene.h"
 #include "rigpose/rp_pipe.h"
 
@@ -86,6 +87,9 @@ int main(int argc, char **argv)
         cfg.track.target = (uint16_t)target;
         cfg.track.topup_below = (uint16_t)(target * 4 / 5);
     }
+    static const char *const why[][2] = {{"track.", "--win / --levels / --target"},
+                                         {NULL, NULL}};
+    (void)rp_cfg_diff_print(stderr, "frameset_driver", &cfg, why);
     if (rp_pipe_init(&pipe_state, bt_scene_rig(sc), &cfg) != RP_OK) {
         fprintf(stderr, "frameset_driver: setup failed (layout %s)\n", layout);
         return 1;

@@ -33,6 +33,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "../../common/rp_cfg_diff.h"
 #include "rigpose/rp_pipe.h"
 #include "rp_render.hpp"
 #include "rp_render_cli.hpp"
@@ -130,7 +131,8 @@ void add_err(const rp_real p[6], const double *truth, double acc[NCOL])
 }
 
 /* The layout's pipeline configuration on the paper's rig, with rigpose-sim's estimator settings:
- * sigma 0.5 px; single-camera features start at the shell's mid radius 0.8335 m +- 0.15 m. */
+ * sigma 0.5 px; single-camera features start at the shell's mid radius 0.8335 m +- 0.15 m.
+ * main() prints what this changes from the core's defaults (e2e_why). */
 rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, rp_pipe_cfg_t *cfg)
 {
     const rp_status_t st = rp_pipe_default_cfg(layout, cfg);
@@ -148,6 +150,15 @@ rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, rp_pipe_cfg_t *cf
     cfg->mono.init_depth_sigma_m = (rp_real)0.15;
     return RP_OK;
 }
+
+const char *const e2e_why[][2] = {
+    {"stereo.ekf.sigma_px", "--sigma-px"},
+    {"gc.ekf.sigma_px", "--sigma-px"},
+    {"mono.ekf.sigma_px", "--sigma-px"},
+    {"gc.init_on_sphere", "the rendered shell surrounds the rig: depth along the ray"},
+    {"gc.init_depth", "rigpose-sim's setting: the shell's mid radius 0.8335 m +- 0.15 m"},
+    {"mono.init_depth", "rigpose-sim's setting: the shell's mid depth 0.8335 m +- 0.15 m"},
+    {nullptr, nullptr}};
 
 /* The feature-level reference: the estimator of cfg on rp_sim_frame's features of the same run.
  * Only the estimator is used (the pipeline's trackers are not). */
@@ -405,6 +416,9 @@ int main(int argc, char **argv)
         std::vector<rp_pipe_cfg_t> cfgs(methods.size());
         for (size_t m = 0; m < methods.size(); ++m) {
             rp_status_t st = make_cfg(methods[m].layout, sigma_px, &cfgs[m]);
+            if (st == RP_OK && r == first_run) {
+                (void)rp_cfg_diff_print(stderr, "rigpose-e2e", &cfgs[m], e2e_why);
+            }
             if (st == RP_OK) {
                 st = rp_pipe_init(pipes[m], &seq.rig(), &cfgs[m]);
             }

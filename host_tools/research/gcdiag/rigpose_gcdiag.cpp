@@ -48,6 +48,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "../../common/rp_cfg_diff.h"
 #include "rigpose/rp_pipe.h"
 #include "rp_render.hpp"
 #include "rp_render_cli.hpp"
@@ -570,6 +571,17 @@ int main(int argc, char **argv)
         }
         if (topup >= 0) {
             cfg.track.topup_below = (uint16_t)topup;
+        }
+        if (r == first_run) {
+            static const char *const why[][2] = {
+                {"gc.init_on_sphere", "the rendered shell surrounds the rig: depth along the ray"},
+                {"gc.init_depth", "rigpose-sim's setting: the shell's mid radius 0.8335 m +- "
+                                  "0.15 m (or --init-depth / --init-sigma)"},
+                {"gc.ekf.sigma_px", "rigpose-sim's setting"},
+                {"track.", "--target / --topup"},
+                {"gc.", "this run's gc options"},
+                {nullptr, nullptr}};
+            (void)rp_cfg_diff_print(stderr, "rigpose-gcdiag", &cfg, why);
         }
         if (rp_pipe_init(pipe, &seq.rig(), &cfg) != RP_OK) {
             return 1;

@@ -37,6 +37,7 @@
 #include "rigpose/rp_pipe.h"
 #include "rp_direct.hpp"
 #include "rp_realdata.hpp"
+#include "../../common/rp_cfg_diff.h"
 #include "../../common/rp_cv.hpp"
 
 namespace fs = std::filesystem;
@@ -559,6 +560,14 @@ int main(int argc, char **argv)
     rp_pipe_cfg_t cfg;
     rp_status_t st = make_cfg(pr, &cfg);
     if (st == RP_OK) {
+        /* the per-format profile (README.md; its removal is a later issue), the rig's numbering
+         * (0 left, 1 right) and --set options: one line per change from the core's default */
+        char why[64];
+        std::snprintf(why, sizeof why, "profile %s", is_kitti ? "kitti" : "euroc");
+        const char *const table[][2] = {{"stereo.pair_", "the dataset's numbering: 0 left, 1 right"},
+                                        {"", why},
+                                        {nullptr, nullptr}};
+        (void)rp_cfg_diff_print(stderr, "rigpose-realdata", &cfg, table);
         st = rp_pipe_init(&pipe, &seq.rig, &cfg);
     }
     if (st != RP_OK) {

@@ -1,8 +1,13 @@
 /*
  * rp_config.h - the rigpose configuration file (YAML, schema in config/README.md), read with
  * Debian's libyaml (document API) into the structures the daemon runs on: the rig, the
- * estimator's configuration, the HAL source's configuration, the tracker's and the LCM URL and
- * channels.
+ * pipeline's configuration (layout, estimator, tracker), the HAL source's configuration and the
+ * LCM URL and channels.
+ *
+ * The estimator and tracker settings have no defaults here: the parser starts from the core's
+ * rp_pipe_default_cfg for the file's layout and overrides only the keys the file gives, so a
+ * file that gives none runs exactly what the benchmarks measure (daemon/tests/test_config.c
+ * checks it for every layout, and checks config/README.md's table of defaults against it).
  *
  * Not core code (it uses stdio and libyaml), but it keeps no heap after it returns: everything
  * lands in the caller's rp_config_t.
@@ -17,11 +22,8 @@
 #include <stdint.h>
 
 #include "rigpose/rp_hal.h"
+#include "rigpose/rp_pipe.h"
 #include "rigpose/rp_rig.h"
-#include "rigpose/rp_track.h"
-#include "rigpose/rp_vo_gc.h"
-#include "rigpose/rp_vo_mono.h"
-#include "rigpose/rp_vo_stereo.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -39,20 +41,6 @@ typedef enum {
 } rp_cfg_status_t;
 
 const char *rp_cfg_status_str(rp_cfg_status_t s);
-
-/* Estimators; the values are rigpose.pose_t's METHOD_* constants. */
-typedef enum {
-    RP_METHOD_STEREO4 = 0,
-    RP_METHOD_STEREO2 = 1,
-    RP_METHOD_GC = 2,
-    RP_METHOD_CAM1 = 3,
-    RP_METHOD_CAM2 = 4,
-    RP_METHOD_CAM3 = 5,
-    RP_METHOD_CAM4 = 6,
-    RP_METHOD_RC = 7
-} rp_method_t;
-
-const char *rp_method_name(rp_method_t m);
 
 #define RP_CFG_NAME_MAX 32     /* camera names, with the terminating NUL */
 #define RP_CFG_CHANNEL_MAX 64  /* LCM channel names, with the NUL */
@@ -74,12 +62,9 @@ typedef struct {
     char cam_name[RP_MAX_CAMS][RP_CFG_NAME_MAX];
     rp_hal_cfg_t hal;                      /* kind, cameras, timeouts, sim seed/frames */
     rp_cfg_sim_t sim;
-    rp_method_t method;
-    rp_vo_stereo_cfg_t stereo;             /* stereo4 / stereo2 */
-    rp_vo_gc_cfg_t gc;                     /* gc */
-    rp_vo_mono_cfg_t mono[4];              /* cam1..cam4 (mono[0]) and rc (the four cameras) */
-    uint8_t n_mono;
-    rp_track_cfg_t track;                  /* per camera: .cam is set by the user of the config */
+    rp_pipe_cfg_t pipe;                    /* the estimator: rp_pipe_default_cfg of the layout
+                                            * estimator.method names, with the cameras and the
+                                            * keys the file gives over it (estimator, tracker) */
     char lcm_url[RP_CFG_URL_MAX];
     char pose_channel[RP_CFG_CHANNEL_MAX];
     char status_channel[RP_CFG_CHANNEL_MAX];
