@@ -299,14 +299,14 @@ static int pair_rejected(const rp_vo_stereo_t *vo, uint32_t n)
  *
  * The gate of the update's first iteration compares each feature with the prediction. The
  * constant-velocity prediction can be far off (the paper's motion draws independent
- * increments every frame), and when it is off along a
- * direction one pair hardly sees (tx against beta for a camera looking along z: a shift
- * x = z beta), that pair's features all agree with the prediction while the other pair's all
- * disagree and are gated; the update then slides along the first pair's blind direction and
- * the other pair's landmarks are dropped as outliers: the pose stays off for good. So when the gate rejects most of a pair, the
- * update is redone from the same prediction with its pose covariance widened by d d^T, d the
- * gap between the prediction and the pose Lowe's method finds from all observations; the
- * retry is kept if it uses more observations than the first update. */
+ * increments every frame), and when it is off along a direction one pair hardly sees (tx
+ * against beta for a camera looking along z: a shift x = z beta), that pair's features all
+ * agree with the prediction while the other pair's all disagree and are gated; the update then
+ * slides along the first pair's blind direction and the other pair's landmarks are dropped as
+ * outliers: the pose stays off for good. So when the gate rejects most of a pair, the update is
+ * redone from the same prediction with its pose covariance widened by d d^T, d the gap between
+ * the prediction and the pose Lowe's method finds from all observations; the retry is kept if
+ * it uses more observations than the first update. */
 static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
                                   rp_ekf_info_t *info)
 {

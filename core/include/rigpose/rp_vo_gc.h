@@ -37,15 +37,15 @@
  *     for the metric scale, and position / orientation drift growing with the frame count.
  *     These are calibrated on the paper's simulation (tests/test_vo_gc.c checks them).
  *  6. Metric scale (mscale_sigma > 0; beyond the paper; rp_vo_gc_scale.c). Steps 1-3 alone
- *     take the metric scale from the assumed depth, for good: landmarks are refined by parallax against the filter's
- *     own translations, so map and trajectory can be wrong by one common factor that no single
- *     frame shows. The map is therefore kept in map units: the offsets the filter projects
+ *     take the metric scale from the assumed depth, for good: landmarks are refined by
+ *     parallax against the filter's own translations, so map and trajectory can be wrong by
+ *     one common factor that no single frame shows. The map is therefore kept in map units: the offsets the filter projects
  *     with are D_k * mu (mu: map units per metre), output translations are divided by mu, new
  *     features start at init_depth_m * mu. Every ba_stride frames the updated pose and the
  *     pixels of ba_per_cam landmarks per camera become a keyframe; every ba_every keyframes
  *     (once RP_VO_GC_BA_MIN_KF are held) a window bundle adjustment in metres over the last
- *     ba_kf keyframes (rp_gcba.h) says which mu the window implies, and a scalar filter on mu (prior
- *     1 +- mscale_sigma) takes it with its variance times ba_var_scale. Refused (counted in
+ *     ba_kf keyframes (rp_gcba.h) says which mu the window implies, and a scalar filter on
+ *     mu (prior 1 +- mscale_sigma) takes it with its variance times ba_var_scale. Refused (counted in
  *     n_ba_rejected): a failed adjustment, one whose RMS residual stays over
  *     RP_VO_GC_BA_MAX_RMS ba.sigma_px, one more than RP_VO_GC_BA_GATE_SIGMA sigma from the
  *     current mu (after RP_VO_GC_BA_MAX_REFUSED such refusals in a row the current mu is the
