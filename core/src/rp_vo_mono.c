@@ -180,7 +180,7 @@ static rp_real obs_weight(const rp_vo_mono_t *vo, const rp_pose_lin_t *pl, const
     }
     const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
     const rp_real w = s2 / (s2 + RP_C(0.5) * tr);
-    return rp_finite(w) && w > RP_C(1e-6) ? w : RP_C(1e-6);
+    return rp_finite(w) && w > RP_VO_MONO_MIN_WEIGHT ? w : RP_VO_MONO_MIN_WEIGHT;
 }
 
 /* Gather the observations of held landmarks of camera cfg.cam in fs into vo->obs (as camera 0

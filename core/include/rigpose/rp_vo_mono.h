@@ -46,6 +46,10 @@ typedef struct {
     uint8_t weight_by_structure;/* 1: weight pose observations by structure uncertainty */
 } rp_vo_mono_cfg_t;
 
+#define RP_VO_MONO_MIN_WEIGHT RP_C(1e-6) /* least structure weight w of an observation (and the
+                                         * weight of one whose w is not finite); keeps every
+                                         * gathered observation in the pose update's sums */
+
 /* Defaults: camera 0, threshold 50, depth 1 m +- 0.3 m, 1/30 s, weighting on. */
 rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void);
 
