@@ -206,6 +206,41 @@ static void test_ring_keeps_the_newest_keyframes(void **state)
     assert_int_equal(ba.n_kf, 3);
 }
 
+/* The state and counts as rp_vo_gc reads them: idle with the keyframes held, then started,
+ * iterating and solved through the pieces, the landmark table counted after the solve. */
+static void test_state_and_counts_follow_the_pieces(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0, 0);
+    const window_t w = {1.15, 0.0, 60, 0.0, 0};
+    fill(fx, &w, 6);
+    rp_gcba_state_t st;
+    uint8_t n_kf = 0;
+    uint16_t n_lm = 0;
+    assert_ok(rp_gcba_state(&fx->ba, &st));
+    assert_int_equal(st, RP_GCBA_IDLE);
+    assert_ok(rp_gcba_counts(&fx->ba, &n_kf, NULL));
+    assert_int_equal(n_kf, 6);
+    rp_gcba_cfg_t cfg = rp_gcba_default_cfg();
+    assert_ok(rp_gcba_start(&fx->ba, &fx->sim.sr.rig, (rp_real)1.0, &cfg));
+    assert_ok(rp_gcba_state(&fx->ba, &st));
+    assert_int_equal(st, RP_GCBA_STARTED);
+    assert_ok(rp_gcba_step(&fx->ba));
+    assert_ok(rp_gcba_state(&fx->ba, &st));
+    assert_true(st == RP_GCBA_ITERATING || st == RP_GCBA_SOLVED);
+    rp_gcba_result_t r;
+    assert_ok(rp_gcba_finish(&fx->ba, &r));
+    assert_ok(rp_gcba_state(&fx->ba, &st));
+    assert_int_equal(st, RP_GCBA_IDLE);
+    assert_ok(rp_gcba_counts(&fx->ba, &n_kf, &n_lm));
+    assert_int_equal(n_kf, 6);
+    assert_true(n_lm >= r.n_lm && r.n_lm >= 100);
+    assert_status(rp_gcba_state(NULL, &st), RP_E_ARG);
+    assert_status(rp_gcba_state(&fx->ba, NULL), RP_E_ARG);
+    assert_status(rp_gcba_counts(NULL, &n_kf, &n_lm), RP_E_ARG);
+    simfx_free(fx);
+}
+
 static void test_bad_input_gives_clear_status(void **state)
 {
     (void)state;
@@ -296,6 +331,7 @@ int main(void)
         cmocka_unit_test(test_outliers_are_held_by_the_huber_weight),
         cmocka_unit_test(test_without_rotation_the_scale_is_not_claimed),
         cmocka_unit_test(test_ring_keeps_the_newest_keyframes),
+        cmocka_unit_test(test_state_and_counts_follow_the_pieces),
         cmocka_unit_test(test_bad_input_gives_clear_status),
     };
     return cmocka_run_group_tests_name("gcba", tests, NULL, NULL);

@@ -594,6 +594,59 @@ static void test_vector_equals_scalar(void **s)
 }
 
 /* The tracker's state: two pyramids and small row rings, no full-frame response map. */
+/* Feeding a tracker as rp_pipe does for a pair's second camera: adopted features become tracks
+ * at their (Q16-rounded) pixels, only the owner camera's ids survive keep_owned, and the next
+ * serial says which ids are born later. */
+static rp_tracker_t fed;
+
+static void test_feeding_a_tracker(void **s)
+{
+    (void)s;
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    cfg.cam = 1;
+    assert_ok(rp_track_init(&fed, &cfg));
+    uint32_t k0 = 99;
+    assert_ok(rp_track_next_serial(&fed, &k0));
+    assert_int_equal(k0, 0);
+    const rp_pyr_t *pyr = NULL;
+    assert_ok(rp_track_current_pyr(&fed, &pyr));
+    assert_non_null(pyr);
+    const rp_feat_t a = {0 + RP_MAX_CAMS * 5, {(rp_real)10.25, (rp_real)20.5}}; /* camera 0's */
+    const rp_feat_t b = {2 + RP_MAX_CAMS * 7, {(rp_real)30.0, (rp_real)40.0}};  /* camera 2's */
+    rp_feat_t bad = a;
+    bad.uv[0] = (rp_real)NAN;
+    assert_ok(rp_track_adopt(&fed, &a));
+    assert_ok(rp_track_adopt(&fed, &b));
+    assert_status(rp_track_adopt(&fed, &bad), RP_E_NAN);
+    rp_feat_t out[4];
+    uint16_t n = 0;
+    assert_ok(rp_track_features(&fed, out, 4, &n));
+    assert_int_equal(n, 2);
+    assert_int_equal(out[0].id, a.id);
+    assert_true(out[0].uv[0] == a.uv[0] && out[0].uv[1] == a.uv[1]); /* exact in Q16 */
+    assert_status(rp_track_features(&fed, out, 1, &n), RP_E_FULL);
+    assert_int_equal(n, 1);
+    uint16_t kept = 0;
+    assert_ok(rp_track_keep_owned(&fed, 0, &kept));
+    assert_int_equal(kept, 1);
+    assert_ok(rp_track_features(&fed, out, 4, &n));
+    assert_int_equal(n, 1);
+    assert_int_equal(out[0].id, a.id);
+    /* full: RP_MAX_FEATS_PER_CAM tracks, the next is refused */
+    for (uint32_t i = 1; i < RP_MAX_FEATS_PER_CAM; ++i) {
+        rp_feat_t f = a;
+        f.id = a.id + RP_MAX_CAMS * i;
+        assert_ok(rp_track_adopt(&fed, &f));
+    }
+    assert_status(rp_track_adopt(&fed, &b), RP_E_FULL);
+    assert_status(rp_track_keep_owned(&fed, RP_MAX_CAMS, NULL), RP_E_ARG);
+    assert_status(rp_track_adopt(NULL, &a), RP_E_ARG);
+    assert_status(rp_track_features(&fed, NULL, 1, &n), RP_E_ARG);
+    assert_status(rp_track_next_serial(NULL, &k0), RP_E_ARG);
+    assert_status(rp_track_current_pyr(&fed, NULL), RP_E_ARG);
+}
+
 static void test_state_size(void **s)
 {
     (void)s;
@@ -606,6 +659,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pyramid),
+        cmocka_unit_test(test_feeding_a_tracker),
         cmocka_unit_test(test_subpixel_shift_small),
         cmocka_unit_test(test_subpixel_shift_medium),
         cmocka_unit_test(test_subpixel_shift_large),

@@ -56,14 +56,14 @@ static double structure_error(const rp_vo_mono_t *vo, const rp_sim_run_t *sr, ui
 {
     double sum = 0;
     uint32_t n = 0;
-    for (uint32_t i = 0; i < RP_IDMAP_MAX_SLOTS; ++i) {
-        const uint32_t id = vo->map.slot_id[i];
-        if (id == RP_IDMAP_EMPTY) continue;
-        const rp_mono_landmark_t *l = &vo->lm[i];
+    for (uint16_t i = 0; i < RP_IDMAP_MAX_SLOTS; ++i) {
+        uint32_t id;
+        rp_point3_t pt;
+        if (rp_lmtab_slot(&vo->lm, i, &id, NULL, &pt) != RP_OK) continue;
         const double *t = &sr->points[3u * id];
         double d2 = 0;
         for (int c = 0; c < 3; ++c) {
-            double d = (double)l->pt.M[c] - t[c];
+            double d = (double)pt.M[c] - t[c];
             d2 += d * d;
         }
         sum += sqrt(d2);

@@ -7,8 +7,16 @@
  * Measurement: the pixel of each tracked feature through eqs. (1)-(2) (rp_rig_project).
  * Update: iterated EKF (Gauss-Newton on the posterior, `iterations` relinearisations), computed
  * in information form (the sum of H^T R^-1 H over features is 6x6, whatever their number), so
- * the covariance stays symmetric positive definite by construction; a Mahalanobis gate
- * rejects outlier features before the final iteration.
+ * the covariance stays symmetric positive definite by construction.
+ * Gate: every iteration tests each feature's innovation r against the current iterate, with
+ * S = J C J^T + sigma^2 / w I (C: the prior pose covariance in the first iteration, the last
+ * iteration's posterior after), and leaves it out when r^T S^-1 r > gate_chi2. An iteration
+ * whose gate would reject more features than it keeps uses them all (the iterate is still
+ * poor: residuals are linearisation error, not noise), and a later iteration gates. The
+ * features counted as used and gated are those of the final iteration.
+ * Fault: an update whose covariance is not positive definite, or whose state is not finite, is
+ * discarded: the state stays as predicted and the covariance becomes the predicted one, made
+ * symmetric and multiplied by RP_EKF_RESET_INFLATION.
  */
 #ifndef RP_EKF_H
 #define RP_EKF_H
@@ -23,6 +31,9 @@ extern "C" {
 #endif
 
 #define RP_EKF_N 12
+#define RP_EKF_RESET_INFLATION RP_C(4.0) /* factor on the predicted covariance after a fault,
+                                          * so that the next measurements can pull the state
+                                          * back (dimensionless) */
 
 typedef struct {
     rp_real sigma_px;  /* measurement noise per pixel coordinate (1-sigma), pixels */
@@ -65,7 +76,8 @@ rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt);
  * Returns RP_OK; RP_E_TOO_FEW (fewer than prm.min_features usable; the state is left as
  * predicted); RP_E_DIVERGED (the update produced a non-finite state or a covariance that is not
  * positive definite: the update is discarded, the covariance reset to its predicted value made
- * symmetric and inflated, info->cov_reset set); RP_E_ARG. In every case the filter stays usable. */
+ * symmetric and times RP_EKF_RESET_INFLATION, info->cov_reset set); RP_E_ARG. In every case
+ * the filter stays usable. */
 rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
                           uint8_t *used, rp_ekf_info_t *info);
 

@@ -176,6 +176,13 @@ rp_status_t rp_gcba_solved_pose(const rp_gcba_t *ba, uint8_t k, rp_real p[6]);
 rp_status_t rp_gcba_landmark(const rp_gcba_t *ba, uint16_t i, uint32_t *id, uint8_t *cam,
                              rp_real X[3], rp_real C[6]);
 
+/* Where the window is: idle, or an adjustment started, iterating or solved. RP_E_ARG (NULL). */
+rp_status_t rp_gcba_state(const rp_gcba_t *ba, rp_gcba_state_t *state);
+
+/* Keyframes held in *n_kf, landmarks in the last adjustment's table (the i of
+ * rp_gcba_landmark) in *n_lm; either may be NULL. RP_E_ARG (NULL ba). */
+rp_status_t rp_gcba_counts(const rp_gcba_t *ba, uint8_t *n_kf, uint16_t *n_lm);
+
 /* Replace keyframe k's stored pose (e.g. with the adjusted one). RP_E_ARG, RP_E_NAN. */
 rp_status_t rp_gcba_set_pose(rp_gcba_t *ba, uint8_t k, const rp_real p[6]);
 

@@ -156,6 +156,33 @@ rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg);
 rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t utime,
                              rp_feat_t *out, uint16_t cap, uint16_t *n_out, rp_track_info_t *info);
 
+/* ---- feeding a tracker: the second camera of a stereo pair (rp_pipe) runs a tracker that only
+ * follows the features handed to it, matched from the pair's first camera. */
+
+/* Keeps only the tracks whose id comes from camera owner (id % RP_MAX_CAMS == owner, the id
+ * scheme of rp_tracker_t.next_k), in their order; *n_kept (may be NULL) gets how many remain.
+ * RP_E_ARG (NULL trk, owner >= RP_MAX_CAMS). */
+rp_status_t rp_track_keep_owned(rp_tracker_t *trk, uint8_t owner, uint16_t *n_kept);
+
+/* Adopts feature f, found in the tracker's current image by other means (a stereo match), as a
+ * track with f's id at f's pixel (rounded to Q16); the next rp_track_process tracks it.
+ * RP_E_FULL (RP_MAX_FEATS_PER_CAM tracks held: nothing added), RP_E_NAN (non-finite pixel),
+ * RP_E_ARG (NULL). */
+rp_status_t rp_track_adopt(rp_tracker_t *trk, const rp_feat_t *f);
+
+/* The current tracks as rp_track_process writes them (id, level-0 pixel): at most cap into out,
+ * *n their number. RP_E_FULL (more than cap: the first cap written), RP_E_ARG (NULL). */
+rp_status_t rp_track_features(const rp_tracker_t *trk, rp_feat_t *out, uint16_t cap,
+                              uint16_t *n);
+
+/* *k: the serial of the next new track (its id is cfg.cam + RP_MAX_CAMS * serial), so a track
+ * whose id / RP_MAX_CAMS >= *k was born after this call. RP_E_ARG (NULL). */
+rp_status_t rp_track_next_serial(const rp_tracker_t *trk, uint32_t *k);
+
+/* *pyr: the pyramid of the last accepted image (for matching features into it; before the
+ * first image it holds nothing). RP_E_ARG (NULL). */
+rp_status_t rp_track_current_pyr(const rp_tracker_t *trk, const rp_pyr_t **pyr);
+
 /* Builds a Gaussian pyramid of img ([1 4 6 4 1]/16 separable, as cv::pyrDown, borders reflected
  * 101; sums in int32, result rounded: (sum + 128) >> 8). RP_E_ARG as rp_track_process. */
 rp_status_t rp_pyr_build(rp_pyr_t *pyr, const rp_image_t *img, uint8_t levels);

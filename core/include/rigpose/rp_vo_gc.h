@@ -30,29 +30,30 @@
  *     pose (no backtracking is needed: the new landmarks' depths are unknown anyway, and they
  *     enter the pose update only once converged). The across-ray covariance of a topped-up
  *     landmark includes the pose uncertainty.
- *  6. Metric scale (mscale_sigma > 0; beyond the paper). Steps 1-3 alone take the metric scale
- *     from the assumed depth, for good: landmarks are refined by parallax against the filter's
- *     own translations, so map and trajectory can be wrong by one common factor that no single
- *     frame shows. The map is therefore kept in map units: the offsets the filter projects
+ *  5. Reported covariance. The pose EKF treats the landmarks' errors as independent, but they
+ *     are not (every landmark was placed from estimated poses and one assumed depth), so its
+ *     own covariance is far too small. The estimate's covariance
+ *     is the filter's plus the map's correlated errors as "consider" terms: scale_sigma^2 t t^T
+ *     for the metric scale, and position / orientation drift growing with the frame count.
+ *     These are calibrated on the paper's simulation (tests/test_vo_gc.c checks them).
+ *  6. Metric scale (mscale_sigma > 0; beyond the paper; rp_vo_gc_scale.c). Steps 1-3 alone
+ *     take the metric scale from the assumed depth, for good: landmarks are refined by
+ *     parallax against the filter's own translations, so map and trajectory can be wrong by
+ *     one common factor that no single frame shows. The map is therefore kept in map units: the offsets the filter projects
  *     with are D_k * mu (mu: map units per metre), output translations are divided by mu, new
  *     features start at init_depth_m * mu. Every ba_stride frames the updated pose and the
  *     pixels of ba_per_cam landmarks per camera become a keyframe; every ba_every keyframes
- *     (from the third on) a window bundle adjustment in metres over the last ba_kf keyframes
- *     (rp_gcba.h) says which mu the window implies, and a scalar filter on mu (prior
- *     1 +- mscale_sigma) takes it with its variance times ba_var_scale. Refused (counted in
- *     n_ba_rejected): a failed adjustment, one whose RMS residual stays over 1.5 ba.sigma_px,
- *     one more than 4 sigma from the current mu (after two such refusals in a row the current
- *     mu is the suspect: its variance goes back to the prior and the next one is taken).
+ *     (once RP_VO_GC_BA_MIN_KF are held) a window bundle adjustment in metres over the last
+ *     ba_kf keyframes (rp_gcba.h) says which mu the window implies, and a scalar filter on
+ *     mu (prior 1 +- mscale_sigma) takes it with its variance times ba_var_scale. Refused (counted in
+ *     n_ba_rejected): a failed adjustment, one whose RMS residual stays over
+ *     RP_VO_GC_BA_MAX_RMS ba.sigma_px, one more than RP_VO_GC_BA_GATE_SIGMA sigma from the
+ *     current mu (after RP_VO_GC_BA_MAX_REFUSED such refusals in a row the current mu is the
+ *     suspect: its variance goes back to the prior and the next one is taken).
  *     A taken adjustment also (a) moves each landmark with its camera's centre at the new
  *     offsets, (b) writes the window's solved poses back into the keyframes, (c) sets the
  *     filter's pose to the newest keyframe's solution, the map following rigidly, and
  *     (d) replaces the adjusted landmarks' positions and covariances by the solution's.
- *  5. Reported covariance. The pose EKF treats the landmarks' errors as independent, but they
- *     are not (every landmark was placed from estimated poses and one assumed depth), so its
- *     own covariance is far too small (NEES ~1e4 in the simulation). The estimate's covariance
- *     is the filter's plus the map's correlated errors as "consider" terms: scale_sigma^2 t t^T
- *     for the metric scale, and position / orientation drift growing with the frame count.
- *     These are calibrated on the paper's simulation (tests/test_vo_gc.c checks them).
  * Output: an rp_estimate_t, the pose of cam1 in the world (rp_frame.h).
  */
 #ifndef RP_VO_GC_H
@@ -61,7 +62,7 @@
 #include "rp_ekf.h"
 #include "rp_frame.h"
 #include "rp_gcba.h"
-#include "rp_idmap.h"
+#include "rp_lmtab.h"
 #include "rp_obs.h"
 #include "rp_rig.h"
 #include "rp_struct.h"
@@ -113,6 +114,15 @@ typedef struct {
     rp_gcba_cfg_t ba;             /* the adjustment (rp_gcba.h) */
 } rp_vo_gc_cfg_t;
 
+/* Step 6's fixed rules (rp_vo_gc_scale.c). */
+#define RP_VO_GC_BA_MIN_KF 3            /* keyframes a window needs before it is adjusted */
+#define RP_VO_GC_BA_MAX_RMS RP_C(1.5)   /* refuse an adjustment whose RMS residual is over this
+                                         * times ba.sigma_px (unconverged or wrong) */
+#define RP_VO_GC_BA_GATE_SIGMA RP_C(4.0) /* refuse a window's mu further than this many sigma
+                                          * (both variances) from the current mu */
+#define RP_VO_GC_BA_MAX_REFUSED 2       /* after this many such refusals in a row the current
+                                         * mu's variance goes back to its prior */
+
 /* Defaults: the paper's threshold of 50, plane at 1 m +- 0.3 m, mature at 2 % of the range
  * (at least 50 mature landmarks, else all enter), no information cap, reported scale sigma 2 %,
  * position drift 6e-5 m and orientation drift 1e-4 rad per sqrt(frame), 1/30 s; step 6 on:
@@ -120,12 +130,6 @@ typedef struct {
  * camera, windows of 6 keyframes adjusted every 2 keyframes (2 Gauss-Newton iterations), the
  * window's variance times 3. */
 rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void);
-
-typedef struct {
-    uint8_t cam;     /* camera that sees it */
-    uint8_t mature;  /* depth converged (enters the pose update) */
-    rp_point3_t pt;  /* world position (m) and its covariance */
-} rp_gc_landmark_t;
 
 #define RP_VO_GC_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
 #define RP_VO_GC_MAX_OBS (RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM)
@@ -146,9 +150,11 @@ typedef struct {
     uint16_t kf_feat[RP_MAX_FEATS_PER_CAM];   /* and their feature indices */
     rp_vo_gc_cfg_t cfg;
     rp_ekf_t ekf;
-    rp_idmap_t map;                        /* feature id -> slot in lm; group = the camera
-                                            * that sees it; mark = observed this frame */
-    rp_gc_landmark_t lm[RP_IDMAP_MAX_SLOTS]; /* landmark records, by slot */
+    rp_lmtab_t lm;                         /* landmarks: world points in map units; group =
+                                            * the camera that sees it; mark = observed this
+                                            * frame */
+    uint8_t mature[RP_IDMAP_MAX_SLOTS];    /* by slot of lm: 1 once the landmark's depth has
+                                            * converged (it enters the pose update) */
     uint32_t frame;                        /* frames processed */
     int64_t prev_utime;
     rp_obs_t obs[RP_VO_GC_MAX_OBS];        /* scratch: this frame's observations */

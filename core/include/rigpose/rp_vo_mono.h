@@ -27,7 +27,7 @@
 
 #include "rp_ekf.h"
 #include "rp_frame.h"
-#include "rp_idmap.h"
+#include "rp_lmtab.h"
 #include "rp_obs.h"
 #include "rp_rig.h"
 #include "rp_struct.h"
@@ -46,12 +46,12 @@ typedef struct {
     uint8_t weight_by_structure;/* 1: weight pose observations by structure uncertainty */
 } rp_vo_mono_cfg_t;
 
+#define RP_VO_MONO_MIN_WEIGHT RP_C(1e-6) /* least structure weight w of an observation (and the
+                                         * weight of one whose w is not finite); keeps every
+                                         * gathered observation in the pose update's sums */
+
 /* Defaults: camera 0, threshold 50, depth 1 m +- 0.3 m, 1/30 s, weighting on. */
 rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void);
-
-typedef struct {
-    rp_point3_t pt; /* position in world_k (m) and its covariance */
-} rp_mono_landmark_t;
 
 #define RP_VO_MONO_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
 
@@ -60,8 +60,8 @@ typedef struct {
     rp_rig_t own;                      /* one camera at R = I, D = 0 */
     rp_vo_mono_cfg_t cfg;
     rp_ekf_t ekf;                      /* camera's own pose in world_k */
-    rp_idmap_t map;                    /* feature id -> slot in lm; mark = observed now */
-    rp_mono_landmark_t lm[RP_IDMAP_MAX_SLOTS]; /* landmark records, by slot */
+    rp_lmtab_t lm;                     /* landmarks: points in world_k (m), all in group 0;
+                                        * mark = observed now */
     uint16_t n_prev;                   /* previous frame's features of cam, for backtracking */
     rp_feat_t prev[RP_MAX_FEATS_PER_CAM];
     rp_real prev_p[6];                 /* own pose at the previous frame */

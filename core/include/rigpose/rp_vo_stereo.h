@@ -24,7 +24,7 @@
 
 #include "rp_ekf.h"
 #include "rp_frame.h"
-#include "rp_idmap.h"
+#include "rp_lmtab.h"
 #include "rp_lowe.h"
 #include "rp_obs.h"
 #include "rp_rig.h"
@@ -57,10 +57,6 @@ typedef struct {
  * (or rp_pipe_default_cfg) names them. */
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
 
-typedef struct {
-    rp_point3_t pt; /* world position (m) and its covariance */
-} rp_landmark_t;
-
 #define RP_VO_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
 
 typedef struct {
@@ -71,10 +67,9 @@ typedef struct {
     rp_ekf_t ekf_pred;                  /* scratch: the prediction, for a retried update */
     uint32_t n_retried;                 /* updates redone because the gate rejected most of a
                                          * pair (rp_vo_stereo.c, predict_update) */
-    rp_idmap_t map;                     /* feature id -> slot in lm; group = the pair that
+    rp_lmtab_t lm;                      /* landmarks: world points (m); group = the pair that
                                          * triangulated it; mark = observed (and not gated)
                                          * in the current frame */
-    rp_landmark_t lm[RP_IDMAP_MAX_SLOTS]; /* landmark records, by slot */
     rp_frameset_t prev;                 /* previous frame set, for backtracking */
     rp_real prev_p[6];                  /* pose estimate at the previous frame */
     uint32_t frame;                     /* frames processed */

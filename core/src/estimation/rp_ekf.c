@@ -153,7 +153,7 @@ static rp_real mahalanobis2(const rp_real J[12], const rp_real *C, rp_real s2, c
     }
     rp_real det = S[0] * S[3] - S[1] * S[2];
     if (!(det > RP_C(0.0))) {
-        return RP_C(1e30);
+        return RP_C(1e30); /* S not positive definite: farther than any gate */
     }
     return (S[3] * r[0] * r[0] - (S[1] + S[2]) * r[0] * r[1] + S[0] * r[1] * r[1]) / det;
 }
@@ -196,13 +196,13 @@ static rp_status_t pose_posterior(const rp_real L[36], const rp_real A[36], rp_r
 }
 
 /* Discard a failed update: keep the predicted state, make the covariance symmetric and
- * inflate it (x4) so that the next measurements can pull the state back. */
+ * inflate it by RP_EKF_RESET_INFLATION. */
 static void reset_covariance(rp_ekf_t *ekf, const rp_real P0[N * N])
 {
     memcpy(ekf->P, P0, sizeof(ekf->P));
     symmetrize(ekf->P, N);
     for (int i = 0; i < N * N; ++i) {
-        ekf->P[i] *= RP_C(4.0);
+        ekf->P[i] *= RP_EKF_RESET_INFLATION;
     }
 }
 

@@ -679,3 +679,26 @@ rp_status_t rp_gcba_landmark(const rp_gcba_t *ba, uint16_t i, uint32_t *id, uint
     C[5] = (rp_real)V[8];
     return RP_OK;
 }
+
+rp_status_t rp_gcba_state(const rp_gcba_t *ba, rp_gcba_state_t *state)
+{
+    if (!ba || !state) {
+        return RP_E_ARG;
+    }
+    *state = ba->state;
+    return RP_OK;
+}
+
+rp_status_t rp_gcba_counts(const rp_gcba_t *ba, uint8_t *n_kf, uint16_t *n_lm)
+{
+    if (!ba) {
+        return RP_E_ARG;
+    }
+    if (n_kf) {
+        *n_kf = ba->n_kf;
+    }
+    if (n_lm) {
+        *n_lm = ba->n_lm_tab;
+    }
+    return RP_OK;
+}

@@ -1060,9 +1060,8 @@ static int detect(rp_tracker_t *trk, int want)
  * distance: 0.55 px rms at 320x240 and 0.93 px at 640x480 on the benchmark's scenes, against 1.9
  * and 4.0 px for the frame's mean) on the finest level only. A track with no such neighbour, or
  * that fails from the guess (lost or failing the backward check, but not by leaving the image),
- * runs from zero motion over all levels, so a guess only saves work. (The frame's mean flow as a
- * guess on two levels, where no neighbour is near, raised the KITTI 00 frames 50-69 ATE of
- * host_tools/realdata from 0.76 % to 1.6 % of the path: forward motion has no common flow.)
+ * runs from zero motion over all levels, so a guess only saves work. (The frame's mean flow is no
+ * guess where no neighbour is near: under forward motion there is no common flow.)
  * The backward check starts at the original position (the forward displacement reversed) on the
  * finest BACK_LEVELS levels: a consistent track returns there within cfg.fb_max_q16; a wrong one
  * (an occlusion, another surface) finds no fixed point near it or fails the residual test
@@ -1249,18 +1248,12 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
             inf.flags |= RP_TRACK_TOPPED_UP;
         }
     }
-    const uint16_t nw = trk->n < cap ? trk->n : cap;
-    for (uint16_t i = 0; i < nw; ++i) {
-        out[i].id = trk->id[i];
-        out[i].uv[0] = (rp_real)trk->pos_q16[i][0] / RP_C(65536.0);
-        out[i].uv[1] = (rp_real)trk->pos_q16[i][1] / RP_C(65536.0);
-    }
-    *n_out = nw;
+    st = rp_track_features(trk, out, cap, n_out);
     if (info != NULL) {
         *info = inf;
     }
     if (trk->n == 0) {
         return RP_E_TOO_FEW;
     }
-    return trk->n > cap ? RP_E_FULL : RP_OK;
+    return st;
 }

@@ -6,10 +6,8 @@
 #include "priv/rp_math.h"
 #include "rigpose/rp_lowe.h"
 #include "rigpose/rp_rot.h"
+#include "rigpose/rp_vo.h"
 #include "rigpose/rp_vo_mono.h"
-
-#define START_SIGMA_V RP_C(1.0)
-#define START_SIGMA_W RP_C(1.0)
 
 rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void)
 {
@@ -25,35 +23,10 @@ rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void)
     return c;
 }
 
-/* ---- landmark records, found by id through vo->map ------------------------------------- */
-
-static rp_mono_landmark_t *lm_find(rp_vo_mono_t *vo, uint32_t id)
-{
-    uint16_t slot;
-    return rp_idmap_find(&vo->map, id, &slot) == RP_OK ? &vo->lm[slot] : NULL;
-}
-
-static rp_status_t lm_insert(rp_vo_mono_t *vo, uint32_t id, const rp_point3_t *pt)
-{
-    uint16_t slot;
-    rp_status_t st = rp_idmap_insert(&vo->map, id, 0, &slot);
-    if (st == RP_OK) {
-        vo->lm[slot].pt = *pt;
-    }
-    return st;
-}
-
-static void lm_mark_seen(rp_vo_mono_t *vo, const rp_mono_landmark_t *l)
-{
-    (void)rp_idmap_mark(&vo->map, (uint16_t)(l - vo->lm));
-}
-
 rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_mono_cfg_t *cfg)
 {
-    if (!vo || !rig || !cfg) {
-        return RP_E_ARG;
-    }
-    rp_status_t st = rp_rig_check(rig);
+    rp_ekf_t idle;
+    rp_status_t st = vo && cfg ? rp_vo_init_filter(rig, &cfg->ekf, &idle) : RP_E_ARG;
     if (st != RP_OK) {
         return st;
     }
@@ -69,15 +42,8 @@ rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_m
     memset(vo->own.cam[0].R, 0, sizeof(vo->own.cam[0].R));
     vo->own.cam[0].R[0] = vo->own.cam[0].R[4] = vo->own.cam[0].R[8] = RP_C(1.0);
     vo->own.cam[0].cam = rig->cam[cfg->cam].cam;
-    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
-    for (int i = 0; i < RP_EKF_N; ++i) {
-        P0[i] = RP_C(1.0);
-    }
-    st = rp_ekf_init(&vo->ekf, &cfg->ekf, x0, P0);
-    if (st != RP_OK) {
-        return st;
-    }
-    (void)rp_idmap_clear(&vo->map);
+    vo->ekf = idle;
+    (void)rp_lmtab_clear(&vo->lm);
     return RP_OK;
 }
 
@@ -172,8 +138,9 @@ static uint16_t add_features(rp_vo_mono_t *vo, const rp_feat_t *f, uint16_t n, c
     }
     uint16_t added = 0;
     for (uint16_t i = 0; i < n; ++i) {
+        uint16_t slot;
         if (f[i].id == RP_VO_MONO_EMPTY_ID || !rp_all_finite(f[i].uv, 2) ||
-            lm_find(vo, f[i].id) != NULL ||
+            rp_lmtab_find(&vo->lm, f[i].id, &slot) == RP_OK ||
             (only_in && !has_id(only_in, vo->cfg.cam, f[i].id))) {
             continue;
         }
@@ -181,7 +148,7 @@ static uint16_t add_features(rp_vo_mono_t *vo, const rp_feat_t *f, uint16_t n, c
         if (ortho_point(vo, &pl, f[i].uv, &pt) != RP_OK) {
             continue;
         }
-        if (lm_insert(vo, f[i].id, &pt) != RP_OK) {
+        if (rp_lmtab_insert(&vo->lm, f[i].id, 0, &pt, NULL) != RP_OK) {
             break;
         }
         added++;
@@ -213,32 +180,25 @@ static rp_real obs_weight(const rp_vo_mono_t *vo, const rp_pose_lin_t *pl, const
     }
     const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
     const rp_real w = s2 / (s2 + RP_C(0.5) * tr);
-    return rp_finite(w) && w > RP_C(1e-6) ? w : RP_C(1e-6);
+    return rp_finite(w) && w > RP_VO_MONO_MIN_WEIGHT ? w : RP_VO_MONO_MIN_WEIGHT;
 }
 
+/* Gather the observations of held landmarks of camera cfg.cam in fs into vo->obs (as camera 0
+ * of the own rig), weighted at the predicted pose p_pred. */
 static uint32_t gather_obs(rp_vo_mono_t *vo, const rp_frameset_t *fs, const rp_real p_pred[6])
 {
     rp_pose_lin_t pl;
     const int have_pl = rp_pose_lin_set(&pl, p_pred) == RP_OK;
-    const uint8_t cam = vo->cfg.cam;
     uint32_t n = 0;
-    for (uint16_t f = 0; f < fs->n[cam]; ++f) {
-        const rp_feat_t *ft = &fs->f[cam][f];
-        if (!rp_all_finite(ft->uv, 2)) {
-            continue;
-        }
-        rp_mono_landmark_t *l = lm_find(vo, ft->id);
-        if (!l) {
-            continue;
-        }
-        rp_obs_t *o = &vo->obs[n];
-        o->uv[0] = ft->uv[0];
-        o->uv[1] = ft->uv[1];
-        memcpy(o->M, l->pt.M, sizeof(o->M));
-        o->w = have_pl ? obs_weight(vo, &pl, &l->pt) : RP_C(1.0);
+    (void)rp_lmtab_gather(&vo->lm, fs, &vo->cfg.cam, 1, 0, vo->obs, vo->obs_id,
+                          RP_MAX_FEATS_PER_CAM, &n);
+    for (uint32_t i = 0; i < n; ++i) {
+        uint16_t slot;
+        rp_obs_t *o = &vo->obs[i];
         o->cam = 0;
-        vo->obs_id[n] = ft->id;
-        n++;
+        if (have_pl && rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK) {
+            o->w = obs_weight(vo, &pl, &vo->lm.pt[slot]);
+        }
     }
     return n;
 }
@@ -248,17 +208,9 @@ static void fill_estimates(const rp_vo_mono_t *vo, int64_t utime, uint32_t flags
 {
     rp_estimate_t e;
     memset(&e, 0, sizeof(e));
-    e.utime = utime;
-    e.frame = vo->frame;
-    for (int i = 0; i < 6; ++i) {
-        e.p[i] = vo->ekf.x[i];
-        e.v[i] = vo->ekf.x[6 + i];
-        for (int j = 0; j < 6; ++j) {
-            e.cov[i * 6 + j] = vo->ekf.P[i * RP_EKF_N + j];
-        }
-    }
-    e.flags = flags | RP_EST_SCALE_WEAK; /* a single camera's scale is the assumed depth's */
-    e.n_landmarks = vo->map.n;
+    /* a single camera's scale is the assumed depth's */
+    (void)rp_vo_fill_estimate(&vo->ekf, RP_C(1.0), utime, vo->frame, flags | RP_EST_SCALE_WEAK,
+                              vo->lm.map.n, &e);
     if (own) {
         *own = e;
     }
@@ -303,20 +255,15 @@ static rp_status_t first_frame(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_est
                                rp_estimate_t *own)
 {
     static const rp_real zero[6] = {0};
-    (void)rp_idmap_clear(&vo->map);
+    (void)rp_lmtab_clear(&vo->lm);
     const uint16_t added = add_features(vo, fs->f[vo->cfg.cam], fs->n[vo->cfg.cam], zero, NULL);
-    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
-    for (int i = 0; i < 6; ++i) {
-        P0[i] = RP_C(1e-12);
-        P0[6 + i] = i < 3 ? START_SIGMA_V * START_SIGMA_V : START_SIGMA_W * START_SIGMA_W;
-    }
-    (void)rp_ekf_init(&vo->ekf, &vo->cfg.ekf, x0, P0);
+    (void)rp_vo_ekf_at_origin(&vo->ekf, &vo->cfg.ekf);
     remember(vo, fs);
     uint32_t flags = RP_EST_INITIALISING;
     if (added < vo->cfg.min_tracked) {
         flags |= RP_EST_DEGRADED;
     }
-    if (added >= 6) {
+    if (added >= RP_VO_MIN_START) {
         vo->frame = 1;
     } /* else: stay at frame 0, the next frame set starts again */
     fill_estimates(vo, fs->utime, flags, est, own);
@@ -324,7 +271,7 @@ static rp_status_t first_frame(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_est
     if (own) {
         own->frame = 0;
     }
-    return added >= 6 ? RP_OK : RP_E_TOO_FEW;
+    return added >= RP_VO_MIN_START ? RP_OK : RP_E_TOO_FEW;
 }
 
 /* Step (2): Lowe's method on the orthographic structure starts the filter. */
@@ -336,46 +283,14 @@ static rp_status_t start_with_lowe(rp_vo_mono_t *vo, uint32_t n, rp_real dt)
     if (st != RP_OK && st != RP_E_NO_CONVERGE) {
         return st;
     }
-    const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
-    rp_real x[RP_EKF_N], P0diag[RP_EKF_N];
-    for (int i = 0; i < 6; ++i) {
-        x[i] = p[i];
-        x[6 + i] = (p[i] - vo->prev_p[i]) / dt;
-        P0diag[i] = cov[i * 6 + i] * s2;
-        P0diag[6 + i] = P0diag[i] / (dt * dt) +
-                        (i < 3 ? START_SIGMA_V * START_SIGMA_V : START_SIGMA_W * START_SIGMA_W);
-    }
-    st = rp_ekf_init(&vo->ekf, &vo->cfg.ekf, x, P0diag);
+    st = rp_vo_ekf_from_pose(&vo->ekf, &vo->cfg.ekf, p, cov, vo->prev_p, dt);
     if (st != RP_OK) {
         return st;
-    }
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            vo->ekf.P[i * RP_EKF_N + j] = cov[i * 6 + j] * s2;
-        }
     }
     for (uint32_t i = 0; i < n; ++i) {
         vo->used[i] = 1;
     }
     return RP_OK;
-}
-
-static void refine_structure(rp_vo_mono_t *vo, uint32_t n)
-{
-    rp_pose_lin_t pl;
-    if (rp_pose_lin_set(&pl, vo->ekf.x) != RP_OK) {
-        return;
-    }
-    for (uint32_t i = 0; i < n; ++i) {
-        if (!vo->used[i]) {
-            continue;
-        }
-        rp_mono_landmark_t *l = lm_find(vo, vo->obs_id[i]);
-        if (l) {
-            (void)rp_struct_update(&l->pt, &vo->own, 0, &pl, vo->obs[i].uv, vo->cfg.ekf.sigma_px,
-                                   vo->cfg.ekf.gate_chi2);
-        }
-    }
 }
 
 rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estimate_t *est,
@@ -395,10 +310,8 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
     if (vo->frame == 0) {
         return first_frame(vo, fs, est, own);
     }
-    rp_real dt = vo->cfg.default_dt_s;
-    if (fs->utime > vo->prev_utime) {
-        dt = (rp_real)(fs->utime - vo->prev_utime) * RP_C(1e-6);
-    }
+    rp_real dt;
+    (void)rp_vo_frame_dt(fs, vo->prev_utime, vo->cfg.default_dt_s, &dt);
     uint32_t flags = 0;
 
     /* Predict first (from frame 2 on) so that observation weights use the predicted pose. */
@@ -407,19 +320,17 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
         st = rp_ekf_predict(&vo->ekf, dt);
     }
     uint32_t n = gather_obs(vo, fs, vo->ekf.x);
-    for (uint32_t i = 0; i < n; ++i) {
-        lm_mark_seen(vo, lm_find(vo, vo->obs_id[i]));
-    }
-    (void)rp_idmap_drop_unmarked(&vo->map, RP_IDMAP_ALL_GROUPS, NULL);
+    (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, NULL, n);
+    (void)rp_lmtab_drop_unmarked(&vo->lm, RP_IDMAP_ALL_GROUPS, NULL);
 
     /* Step (5): under the threshold, backtrack one frame and add the previous frame's features
      * (still tracked now) at the previous pose. */
-    if (vo->map.n < vo->cfg.min_tracked) {
+    if (vo->lm.map.n < vo->cfg.min_tracked) {
         (void)add_features(vo, vo->prev, vo->n_prev, vo->prev_p, fs);
         flags |= RP_EST_REINIT;
         n = gather_obs(vo, fs, vo->ekf.x);
     }
-    if (vo->map.n < vo->cfg.min_tracked) {
+    if (vo->lm.map.n < vo->cfg.min_tracked) {
         flags |= RP_EST_DEGRADED;
     }
 
@@ -440,23 +351,20 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
     uint16_t n_used = 0;
     if (st == RP_OK) {
         flags |= RP_EST_TRACKING;
-        refine_structure(vo, n);
+        /* step 4: each used observation updates its landmark at the new pose */
+        (void)rp_lmtab_refine(&vo->lm, &vo->own, vo->ekf.x, vo->obs, vo->obs_id, vo->used, n,
+                              vo->cfg.ekf.sigma_px, vo->cfg.ekf.gate_chi2);
         for (uint32_t i = 0; i < n; ++i) {
             if (vo->used[i]) {
                 n_used++;
-                rp_mono_landmark_t *l = lm_find(vo, vo->obs_id[i]);
-                if (l) {
-                    lm_mark_seen(vo, l);
-                }
             }
         }
+        (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->used, n);
         if (n_gated > 0) {
             flags |= RP_EST_GATED;
-            /* a landmark whose observation was gated is an outlier */
-            (void)rp_idmap_drop_unmarked(&vo->map, RP_IDMAP_ALL_GROUPS, NULL);
-        } else {
-            (void)rp_idmap_clear_marks(&vo->map);
         }
+        /* a landmark whose observation was gated is an outlier */
+        (void)rp_lmtab_drop_unmarked(&vo->lm, n_gated > 0 ? RP_IDMAP_ALL_GROUPS : 0u, NULL);
     } else {
         flags |= RP_EST_LOST;
     }
@@ -470,5 +378,5 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
         own->n_gated = n_gated;
     }
     vo->frame++;
-    return st == RP_OK ? RP_OK : (st == RP_E_DIVERGED ? RP_E_DIVERGED : RP_E_TOO_FEW);
+    return rp_vo_step_status(st);
 }

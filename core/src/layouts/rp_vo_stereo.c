@@ -5,13 +5,10 @@
 #include <string.h>
 
 #include "priv/rp_math.h"
+#include "rigpose/rp_vo.h"
 #include "rigpose/rp_vo_stereo.h"
 
 #define MATCH_CAP (2 * RP_MAX_FEATS_PER_CAM)
-
-/* Prior standard deviations of the velocity when the filter starts (m/s, rad/s). */
-#define START_SIGMA_V RP_C(1.0)
-#define START_SIGMA_W RP_C(1.0)
 
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
 {
@@ -30,27 +27,11 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     return c;
 }
 
-/* ---- landmark records, found by id through vo->map ------------------------------------- */
-
-static rp_landmark_t *lm_find(rp_vo_stereo_t *vo, uint32_t id)
+/* 1 if landmark id is held. */
+static int lm_held(const rp_vo_stereo_t *vo, uint32_t id)
 {
     uint16_t slot;
-    return rp_idmap_find(&vo->map, id, &slot) == RP_OK ? &vo->lm[slot] : NULL;
-}
-
-static rp_status_t lm_insert(rp_vo_stereo_t *vo, uint32_t id, uint8_t pair, const rp_point3_t *pt)
-{
-    uint16_t slot;
-    rp_status_t st = rp_idmap_insert(&vo->map, id, pair, &slot);
-    if (st == RP_OK) {
-        vo->lm[slot].pt = *pt;
-    }
-    return st;
-}
-
-static void lm_mark_seen(rp_vo_stereo_t *vo, const rp_landmark_t *l)
-{
-    (void)rp_idmap_mark(&vo->map, (uint16_t)(l - vo->lm));
+    return rp_lmtab_find(&vo->lm, id, &slot) == RP_OK;
 }
 
 /* ---- set-up ------------------------------------------------------------------------------ */
@@ -58,10 +39,8 @@ static void lm_mark_seen(rp_vo_stereo_t *vo, const rp_landmark_t *l)
 rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
                               const rp_vo_stereo_cfg_t *cfg)
 {
-    if (!vo || !rig || !cfg) {
-        return RP_E_ARG;
-    }
-    rp_status_t st = rp_rig_check(rig);
+    rp_ekf_t idle;
+    rp_status_t st = vo && cfg ? rp_vo_init_filter(rig, &cfg->ekf, &idle) : RP_E_ARG;
     if (st != RP_OK) {
         return st;
     }
@@ -88,15 +67,8 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
             return st;
         }
     }
-    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
-    for (int i = 0; i < RP_EKF_N; ++i) {
-        P0[i] = RP_C(1.0);
-    }
-    st = rp_ekf_init(&vo->ekf, &cfg->ekf, x0, P0);
-    if (st != RP_OK) {
-        return st;
-    }
-    (void)rp_idmap_clear(&vo->map);
+    vo->ekf = idle;
+    (void)rp_lmtab_clear(&vo->lm);
     return RP_OK;
 }
 
@@ -164,7 +136,7 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
         const rp_feat_t *fa = &fs->f[sp->a][f];
         uint16_t jb;
         if (fa->id == RP_VO_EMPTY_ID || !match_map_find(vo, fa->id, &jb) ||
-            lm_find(vo, fa->id) != NULL) {
+            lm_held(vo, fa->id)) {
             continue;
         }
         const rp_feat_t *fb = &fs->f[sp->b][jb];
@@ -187,7 +159,7 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
             rp_struct_init(&pt, vo->rig, cams, 2, &pl, M, cfg->ekf.sigma_px) != RP_OK) {
             continue;
         }
-        if (lm_insert(vo, fa->id, k, &pt) != RP_OK) {
+        if (rp_lmtab_insert(&vo->lm, fa->id, k, &pt, NULL) != RP_OK) {
             break; /* table full: keep what we have */
         }
         added++;
@@ -197,73 +169,30 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
 
 /* ---- measurements ------------------------------------------------------------------------ */
 
-static int cam_in_layout(const rp_vo_stereo_t *vo, uint8_t cam)
-{
-    for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-        if (vo->pair[k].a == cam || vo->pair[k].b == cam) {
-            return 1;
-        }
-    }
-    return 0;
-}
-
-/* Gather the observations of held landmarks in fs into vo->obs. */
+/* Gather the observations of held landmarks in fs into vo->obs (the layout's cameras in rig
+ * order). */
 static uint32_t gather_obs(rp_vo_stereo_t *vo, const rp_frameset_t *fs)
 {
-    uint32_t n = 0;
+    uint8_t cams[RP_MAX_CAMS], n_cams = 0;
     for (uint8_t cam = 0; cam < vo->rig->n_cams && cam < RP_MAX_CAMS; ++cam) {
-        if (!cam_in_layout(vo, cam)) {
-            continue;
-        }
-        for (uint16_t f = 0; f < fs->n[cam]; ++f) {
-            const rp_feat_t *ft = &fs->f[cam][f];
-            if (!rp_all_finite(ft->uv, 2)) {
-                continue;
+        for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+            if (vo->pair[k].a == cam || vo->pair[k].b == cam) {
+                cams[n_cams++] = cam;
+                break;
             }
-            rp_landmark_t *l = lm_find(vo, ft->id);
-            if (!l) {
-                continue;
-            }
-            rp_obs_t *o = &vo->obs[n];
-            o->uv[0] = ft->uv[0];
-            o->uv[1] = ft->uv[1];
-            memcpy(o->M, l->pt.M, sizeof(o->M));
-            o->w = RP_C(1.0);
-            o->cam = cam;
-            vo->obs_id[n] = ft->id;
-            n++;
         }
     }
+    uint32_t n = 0;
+    (void)rp_lmtab_gather(&vo->lm, fs, cams, n_cams, 0, vo->obs, vo->obs_id,
+                          RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM, &n);
     return n;
 }
 
 static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uint32_t flags,
                           rp_estimate_t *est)
 {
-    est->utime = fs ? fs->utime : vo->prev_utime;
-    est->frame = vo->frame;
-    for (int i = 0; i < 6; ++i) {
-        est->p[i] = vo->ekf.x[i];
-        est->v[i] = vo->ekf.x[6 + i];
-        for (int j = 0; j < 6; ++j) {
-            est->cov[i * 6 + j] = vo->ekf.P[i * RP_EKF_N + j];
-        }
-    }
-    est->flags = flags;
-    est->n_landmarks = vo->map.n;
-}
-
-static rp_status_t validate_frameset(const rp_vo_stereo_t *vo, const rp_frameset_t *fs)
-{
-    for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
-        if (fs->n[cam] > RP_MAX_FEATS_PER_CAM) {
-            return RP_E_ARG;
-        }
-        if (cam >= vo->rig->n_cams && fs->n[cam] != 0) {
-            return RP_E_ARG;
-        }
-    }
-    return RP_OK;
+    (void)rp_vo_fill_estimate(&vo->ekf, RP_C(1.0), fs ? fs->utime : vo->prev_utime, vo->frame,
+                              flags, vo->lm.map.n, est);
 }
 
 /* ---- the step ---------------------------------------------------------------------------- */
@@ -272,18 +201,13 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
 {
     /* Step (1) at frame 0: the world is cam1's frame now, so the pose is exactly zero. */
     static const rp_real zero[6] = {0};
-    (void)rp_idmap_clear(&vo->map);
+    (void)rp_lmtab_clear(&vo->lm);
     uint16_t added = 0;
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
         added = (uint16_t)(added + triangulate_pair(vo, k, fs, zero, NULL));
     }
-    (void)rp_idmap_clear_marks(&vo->map);
-    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
-    for (int i = 0; i < 6; ++i) {
-        P0[i] = RP_C(1e-12); /* the pose at frame 0 is the origin by definition */
-        P0[6 + i] = i < 3 ? START_SIGMA_V * START_SIGMA_V : START_SIGMA_W * START_SIGMA_W;
-    }
-    (void)rp_ekf_init(&vo->ekf, &vo->cfg.ekf, x0, P0);
+    (void)rp_lmtab_drop_unmarked(&vo->lm, 0, NULL); /* clears the marks */
+    (void)rp_vo_ekf_at_origin(&vo->ekf, &vo->cfg.ekf);
     vo->frame = 1;
     vo->prev = *fs;
     memset(vo->prev_p, 0, sizeof(vo->prev_p));
@@ -294,7 +218,7 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
     }
     fill_estimate(vo, fs, flags, est);
     est->frame = 0;
-    return added >= 6 ? RP_OK : RP_E_TOO_FEW;
+    return added >= RP_VO_MIN_START ? RP_OK : RP_E_TOO_FEW;
 }
 
 /* Step (2): the second frame starts the filter with Lowe's method on all correspondences;
@@ -311,9 +235,9 @@ static rp_status_t start_with_lowe(rp_vo_stereo_t *vo, uint32_t n, rp_real dt)
         return st;
     }
     const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
-    /* Lowe's method has no gate: one mistracked feature moves this first pose and the filter
-     * keeps the offset (rendered run 4 of seed 1: tz 1.6 mm off at frame 1). Leave out the
-     * observations the EKF's gate would reject at this pose and solve again. */
+    /* Lowe's method has no gate: one mistracked feature moves this first pose, and the filter
+     * keeps the offset. Leave out the observations the EKF's gate would reject at this pose
+     * and solve again. */
     rp_pose_lin_t pl;
     uint32_t n_out = 0;
     if (vo->cfg.ekf.gate_chi2 > RP_C(0.0) && rp_pose_lin_set(&pl, p) == RP_OK) {
@@ -339,45 +263,7 @@ static rp_status_t start_with_lowe(rp_vo_stereo_t *vo, uint32_t n, rp_real dt)
     } else {
         memset(vo->used, 1, n);
     }
-    rp_real x[RP_EKF_N], P0diag[RP_EKF_N];
-    for (int i = 0; i < 6; ++i) {
-        x[i] = p[i];
-        x[6 + i] = (p[i] - vo->prev_p[i]) / dt;
-        P0diag[i] = cov[i * 6 + i] * s2;
-        P0diag[6 + i] = P0diag[i] / (dt * dt) +
-                        (i < 3 ? START_SIGMA_V * START_SIGMA_V : START_SIGMA_W * START_SIGMA_W);
-    }
-    st = rp_ekf_init(&vo->ekf, &vo->cfg.ekf, x, P0diag);
-    if (st != RP_OK) {
-        return st;
-    }
-    /* Keep Lowe's full pose covariance, not only its diagonal. */
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            vo->ekf.P[i * RP_EKF_N + j] = cov[i * 6 + j] * s2;
-        }
-    }
-    return RP_OK;
-}
-
-/* Step 4: each used observation updates its landmark's structure EKF at the new pose. */
-static void refine_structure(rp_vo_stereo_t *vo, uint32_t n)
-{
-    rp_pose_lin_t pl;
-    if (rp_pose_lin_set(&pl, vo->ekf.x) != RP_OK) {
-        return;
-    }
-    for (uint32_t i = 0; i < n; ++i) {
-        if (!vo->used[i]) {
-            continue;
-        }
-        rp_landmark_t *l = lm_find(vo, vo->obs_id[i]);
-        if (l) {
-            /* a rejected update leaves the point as it was */
-            (void)rp_struct_update(&l->pt, vo->rig, vo->obs[i].cam, &pl, vo->obs[i].uv,
-                                   vo->cfg.ekf.sigma_px, vo->cfg.ekf.gate_chi2);
-        }
-    }
+    return rp_vo_ekf_from_pose(&vo->ekf, &vo->cfg.ekf, p, cov, vo->prev_p, dt);
 }
 
 /* Pair of camera cam in the layout; n_pairs if none. */
@@ -415,15 +301,14 @@ static int pair_rejected(const rp_vo_stereo_t *vo, uint32_t n)
  *
  * The gate of the update's first iteration compares each feature with the prediction. The
  * constant-velocity prediction can be far off (the paper's motion draws independent
- * increments every frame: 20-30 mm and 0.03 rad off are common), and when it is off along a
- * direction one pair hardly sees (tx against beta for a camera looking along z: a shift
- * x = z beta), that pair's features all agree with the prediction while the other pair's all
- * disagree and are gated; the update then slides along the first pair's blind direction and
- * the other pair's landmarks are dropped as outliers (rendered run 0 of seed 1, frame 94: tx
- * and beta 16 mm and 0.016 rad off for good). So when the gate rejects most of a pair, the
- * update is redone from the same prediction with its pose covariance widened by d d^T, d the
- * gap between the prediction and the pose Lowe's method finds from all observations; the
- * retry is kept if it uses more observations than the first update. */
+ * increments every frame), and when it is off along a direction one pair hardly sees (tx
+ * against beta for a camera looking along z: a shift x = z beta), that pair's features all
+ * agree with the prediction while the other pair's all disagree and are gated; the update then
+ * slides along the first pair's blind direction and the other pair's landmarks are dropped as
+ * outliers: the pose stays off for good. So when the gate rejects most of a pair, the update is
+ * redone from the same prediction with its pose covariance widened by d d^T, d the gap between
+ * the prediction and the pose Lowe's method finds from all observations; the retry is kept if
+ * it uses more observations than the first update. */
 static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
                                   rp_ekf_info_t *info)
 {
@@ -476,36 +361,26 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         return RP_E_ARG;
     }
     memset(est, 0, sizeof(*est));
-    if (!fs || !vo->rig) {
-        fill_estimate(vo, NULL, RP_EST_LOST, est);
-        return RP_E_ARG;
-    }
-    if (validate_frameset(vo, fs) != RP_OK) {
+    rp_real dt;
+    if (rp_vo_begin_step(vo->rig, fs, vo->prev_utime, vo->cfg.default_dt_s, &dt) != RP_OK) {
         fill_estimate(vo, NULL, RP_EST_LOST, est);
         return RP_E_ARG;
     }
     if (vo->frame == 0) {
         return first_frame(vo, fs, est);
     }
-
-    rp_real dt = vo->cfg.default_dt_s;
-    if (fs->utime > vo->prev_utime) {
-        dt = (rp_real)(fs->utime - vo->prev_utime) * RP_C(1e-6);
-    }
     uint32_t flags = 0;
 
     /* Which landmarks are still tracked; lost ones are dropped. */
     uint32_t n = gather_obs(vo, fs);
-    for (uint32_t i = 0; i < n; ++i) {
-        lm_mark_seen(vo, lm_find(vo, vo->obs_id[i]));
-    }
-    (void)rp_idmap_drop_unmarked(&vo->map, RP_IDMAP_ALL_GROUPS, NULL);
+    (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, NULL, n);
+    (void)rp_lmtab_drop_unmarked(&vo->lm, RP_IDMAP_ALL_GROUPS, NULL);
 
     /* Step (5): a pair under its threshold is re-initialised from the previous frame set at
      * the previous pose (backtracking one frame), with matches still tracked now. */
     int reinit = 0;
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-        if (vo->map.n_group[k] < vo->cfg.min_tracked) {
+        if (vo->lm.map.n_group[k] < vo->cfg.min_tracked) {
             (void)triangulate_pair(vo, k, &vo->prev, vo->prev_p, fs);
             reinit = 1;
         }
@@ -515,7 +390,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         n = gather_obs(vo, fs);
     }
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-        if (vo->map.n_group[k] < vo->cfg.min_tracked) {
+        if (vo->lm.map.n_group[k] < vo->cfg.min_tracked) {
             flags |= RP_EST_DEGRADED;
         }
     }
@@ -541,23 +416,20 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         flags |= RP_EST_TRACKING;
         /* A landmark whose every observation was gated is an outlier track: drop it. */
         for (uint32_t i = 0; i < n; ++i) {
-            rp_landmark_t *l = lm_find(vo, vo->obs_id[i]);
             if (vo->used[i]) {
                 est->n_used[vo->obs[i].cam]++;
-                if (l) {
-                    lm_mark_seen(vo, l);
-                }
             }
         }
+        (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->used, n);
         if (vo->cfg.refine_structure) {
-            refine_structure(vo, n);
+            /* step 4: each used observation updates its landmark at the new pose */
+            (void)rp_lmtab_refine(&vo->lm, vo->rig, vo->ekf.x, vo->obs, vo->obs_id, vo->used, n,
+                                  vo->cfg.ekf.sigma_px, vo->cfg.ekf.gate_chi2);
         }
         if (n_gated > 0) {
             flags |= RP_EST_GATED;
-            (void)rp_idmap_drop_unmarked(&vo->map, RP_IDMAP_ALL_GROUPS, NULL);
-        } else {
-            (void)rp_idmap_clear_marks(&vo->map);
         }
+        (void)rp_lmtab_drop_unmarked(&vo->lm, n_gated > 0 ? RP_IDMAP_ALL_GROUPS : 0u, NULL);
     } else {
         flags |= RP_EST_LOST;
     }
@@ -566,9 +438,6 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     for (int i = 0; i < 6; ++i) {
         vo->prev_p[i] = vo->ekf.x[i];
     }
-    vo->prev_utime = fs->utime;
     fill_estimate(vo, fs, flags, est);
-    est->n_gated = n_gated;
-    vo->frame++;
-    return st == RP_OK ? RP_OK : (st == RP_E_DIVERGED ? RP_E_DIVERGED : RP_E_TOO_FEW);
+    return rp_vo_end_step(fs, n_gated, st, &vo->prev_utime, &vo->frame, est);
 }

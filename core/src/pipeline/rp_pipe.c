@@ -5,8 +5,8 @@
  * Second cameras of stereo pairs run an rp_tracker_t that is fed, not detecting: after every
  * rp_track_process the pipeline keeps only the features it handed over (ids of the pair's first
  * camera, id % RP_MAX_CAMS == that camera, rp_track.h's id scheme) and appends each new match
- * to the tracker's list at its matched position. (rp_track.h has no call to hand features to a
- * tracker yet: this reads and writes rp_tracker_t's documented fields n, id, pos_q16.)
+ * to the tracker's list at its matched position (rp_track_keep_owned, rp_track_adopt,
+ * rp_track_features).
  */
 #include "rigpose/rp_pipe.h"
 
@@ -206,45 +206,6 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
 
 /* ---- second cameras of pairs ---------------------------------------------------------------- */
 
-/* Keeps only the tracker's features whose id comes from camera `owner` (the pair's first). */
-static void trk_keep_owner(rp_tracker_t *trk, uint8_t owner)
-{
-    uint16_t m = 0;
-    for (uint16_t i = 0; i < trk->n; ++i) {
-        if (trk->id[i] % RP_MAX_CAMS == owner) {
-            trk->id[m] = trk->id[i];
-            trk->pos_q16[m][0] = trk->pos_q16[i][0];
-            trk->pos_q16[m][1] = trk->pos_q16[i][1];
-            ++m;
-        }
-    }
-    trk->n = m;
-}
-
-/* Hands feature f (matched in this tracker's current image) to the tracker. 0 if full. */
-static int trk_add(rp_tracker_t *trk, const rp_feat_t *f)
-{
-    if (trk->n >= RP_MAX_FEATS_PER_CAM) {
-        return 0;
-    }
-    trk->id[trk->n] = f->id;
-    trk->pos_q16[trk->n][0] = (int32_t)rp_floor(f->uv[0] * RP_C(65536.0) + RP_C(0.5));
-    trk->pos_q16[trk->n][1] = (int32_t)rp_floor(f->uv[1] * RP_C(65536.0) + RP_C(0.5));
-    trk->n++;
-    return 1;
-}
-
-/* The tracker's features as rp_feat_t (as rp_track_process writes them). */
-static uint16_t trk_export(const rp_tracker_t *trk, rp_feat_t *out)
-{
-    for (uint16_t i = 0; i < trk->n; ++i) {
-        out[i].id = trk->id[i];
-        out[i].uv[0] = (rp_real)trk->pos_q16[i][0] / RP_C(65536.0);
-        out[i].uv[1] = (rp_real)trk->pos_q16[i][1] / RP_C(65536.0);
-    }
-    return trk->n;
-}
-
 static int image_taken(uint8_t state)
 {
     return state == RP_PIPE_CAM_OK || state == RP_PIPE_CAM_NO_FEATURES;
@@ -260,7 +221,10 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     if (!image_taken(info->cam_state[sp->a]) || !image_taken(info->cam_state[sp->b])) {
         return;
     }
-    rp_tracker_t *A = &pipe->trk[ta], *B = &pipe->trk[tb];
+    rp_tracker_t *B = &pipe->trk[tb];
+    const rp_pyr_t *pa, *pb;
+    (void)rp_track_current_pyr(&pipe->trk[ta], &pa);
+    (void)rp_track_current_pyr(B, &pb);
     uint16_t n_new = 0;
     for (uint16_t i = 0; i < pipe->fs.n[sp->a]; ++i) {
         const rp_feat_t *f = &pipe->fs.f[sp->a][i];
@@ -272,12 +236,11 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
         return;
     }
     uint16_t nb = 0;
-    (void)rp_smatch_pair(&pipe->sm, pipe->rig, sp, &A->pyr[A->cur], &B->pyr[B->cur],
-                         pipe->scratch_a, n_new, pipe->scratch_b, RP_MAX_FEATS_PER_CAM, &nb,
-                         &info->match[k]);
-    for (uint16_t i = 0; i < nb && trk_add(B, &pipe->scratch_b[i]); ++i) {
+    (void)rp_smatch_pair(&pipe->sm, pipe->rig, sp, pa, pb, pipe->scratch_a, n_new,
+                         pipe->scratch_b, RP_MAX_FEATS_PER_CAM, &nb, &info->match[k]);
+    for (uint16_t i = 0; i < nb && rp_track_adopt(B, &pipe->scratch_b[i]) != RP_E_FULL; ++i) {
     }
-    pipe->fs.n[sp->b] = trk_export(B, pipe->fs.f[sp->b]);
+    (void)rp_track_features(B, pipe->fs.f[sp->b], RP_MAX_FEATS_PER_CAM, &pipe->fs.n[sp->b]);
 }
 
 /* ---- the step ------------------------------------------------------------------------------- */
@@ -289,7 +252,7 @@ static void track_one(rp_pipe_t *pipe, uint8_t t, const rp_image_t *img, int64_t
     rp_tracker_t *trk = &pipe->trk[t];
     rp_pipe_info_t *info = &pipe->info;
     const rp_camera_t *c = &pipe->rig->cam[cam].cam;
-    pipe->born_k[t] = trk->next_k;
+    (void)rp_track_next_serial(trk, &pipe->born_k[t]);
     pipe->fs.n[cam] = 0;
     if (img == NULL || img->data == NULL) {
         info->cam_state[cam] = RP_PIPE_CAM_MISSING;
@@ -315,8 +278,8 @@ static void track_one(rp_pipe_t *pipe, uint8_t t, const rp_image_t *img, int64_t
     }
     if (pipe->trk_right[t]) {
         /* the pair's first camera is the one whose tracker precedes this one */
-        trk_keep_owner(trk, pipe->trk_cam[t - 1]);
-        n = trk_export(trk, pipe->fs.f[cam]);
+        (void)rp_track_keep_owned(trk, pipe->trk_cam[t - 1], NULL);
+        (void)rp_track_features(trk, pipe->fs.f[cam], RP_MAX_FEATS_PER_CAM, &n);
     }
     pipe->fs.n[cam] = n;
     info->cam_state[cam] = n > 0 ? RP_PIPE_CAM_OK : RP_PIPE_CAM_NO_FEATURES;

@@ -621,10 +621,11 @@ static void landmarks_from_gc(const rp_vo_gc_t &vo, Landmarks &lm)
 {
     lm.M.clear();
     for (int pass = 0; pass < 2 && lm.M.size() < 6; ++pass) {
-        for (uint32_t s = 0; s < RP_IDMAP_MAX_SLOTS; ++s) {
-            const uint32_t id = vo.map.slot_id[s];
-            if (id == RP_IDMAP_EMPTY || (pass == 0 && !vo.lm[s].mature)) continue;
-            const rp_real *M = vo.lm[s].pt.M;
+        for (uint16_t s = 0; s < RP_IDMAP_MAX_SLOTS; ++s) {
+            uint32_t id;
+            if (rp_lmtab_slot(&vo.lm, s, &id, NULL, NULL) != RP_OK ||
+                (pass == 0 && !vo.mature[s])) continue;
+            const rp_real *M = vo.lm.pt[s].M;
             lm.M[id] = Eigen::Vector3d((double)M[0], (double)M[1], (double)M[2]);
         }
     }

@@ -662,11 +662,11 @@ int main(int argc, char **argv)
             {
                 const rp_vo_gc_t *g = &pipe->est.gc;
                 unsigned nm = 0;
-                for (uint32_t s = 0; s < RP_IDMAP_MAX_SLOTS; ++s) {
-                    nm += g->map.slot_id[s] != RP_IDMAP_EMPTY && g->lm[s].mature;
+                for (uint16_t s = 0; s < RP_IDMAP_MAX_SLOTS; ++s) {
+                    nm += rp_lmtab_slot(&g->lm, s, NULL, NULL, NULL) == RP_OK && g->mature[s];
                 }
                 mature_sum += nm;
-                lm_sum += g->map.n;
+                lm_sum += g->lm.map.n;
                 feats_sum += fs->n[0] + fs->n[1] + fs->n[2] + fs->n[3];
                 fs_n++;
             }

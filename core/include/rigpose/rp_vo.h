@@ -1,0 +1,92 @@
+/*
+ * rp_vo.h - what every layout (rp_vo_stereo, rp_vo_mono, rp_vo_gc) does around its pose EKF:
+ * checking a frame set, the frame interval, the filter's start priors, filling the estimate and
+ * mapping the filter's status to the step's. The landmarks live in rp_lmtab.h.
+ *
+ * A layout's filter goes through three priors:
+ *  - idle (rp_vo_ekf_idle): x = 0, P = I, between init and the first frame set (only its
+ *    parameters matter: rp_ekf_init checks them);
+ *  - at the origin (rp_vo_ekf_at_origin): the first frame set defines the world (cam1's frame
+ *    now), so the pose is exactly zero (variance RP_VO_ORIGIN_VAR) and the velocity unknown
+ *    (RP_VO_START_SIGMA_V, RP_VO_START_SIGMA_W);
+ *  - from a pose (rp_vo_ekf_from_pose): at the second frame set, the pose p that Lowe's method
+ *    found with its covariance sigma_px^2 cov (cov per unit pixel variance, as rp_lowe_solve
+ *    gives it), and the velocity (p - p_prev) / dt with variance diag(cov) sigma_px^2 / dt^2
+ *    plus the start sigma^2. The pose block keeps Lowe's full covariance.
+ */
+#ifndef RP_VO_H
+#define RP_VO_H
+
+#include "rp_ekf.h"
+#include "rp_frame.h"
+#include "rp_opts.h"
+#include "rp_rig.h"
+#include "rp_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define RP_VO_START_SIGMA_V RP_C(1.0)  /* velocity prior when a filter starts, 1-sigma, m/s */
+#define RP_VO_START_SIGMA_W RP_C(1.0)  /* angular-rate prior when it starts, 1-sigma, rad/s */
+#define RP_VO_ORIGIN_VAR RP_C(1e-12)   /* variance of the pose at the first frame set (zero by
+                                        * definition; kept positive definite), m^2 and rad^2 */
+#define RP_VO_MIN_START 6              /* landmarks a first frame set needs to count as a start
+                                        * (the 6 pose parameters) */
+
+/* x = 0, P = I under prm (the filter before the first frame set). rp_ekf_init's errors. */
+rp_status_t rp_vo_ekf_idle(rp_ekf_t *ekf, const rp_ekf_params_t *prm);
+
+/* The prior at the first frame set: pose zero with variance RP_VO_ORIGIN_VAR, velocity zero with
+ * the start sigmas. rp_ekf_init's errors. */
+rp_status_t rp_vo_ekf_at_origin(rp_ekf_t *ekf, const rp_ekf_params_t *prm);
+
+/* The prior at the second frame set from pose p (m, rad) and its covariance prm->sigma_px^2 cov
+ * (cov: 6x6 row-major per unit pixel variance), the previous pose p_prev and the interval dt
+ * (s, > 0). RP_E_ARG (NULL, dt not > 0), rp_ekf_init's errors. */
+rp_status_t rp_vo_ekf_from_pose(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real p[6],
+                                const rp_real cov[36], const rp_real p_prev[6], rp_real dt);
+
+/* The checks a layout's init starts with: the rig (rp_rig_check's errors; RP_E_ARG if NULL) and
+ * the filter's parameters prm (rp_ekf_init's errors; RP_E_ARG if NULL). On RP_OK *ekf is the
+ * idle filter (rp_vo_ekf_idle). */
+rp_status_t rp_vo_init_filter(const rp_rig_t *rig, const rp_ekf_params_t *prm, rp_ekf_t *ekf);
+
+/* The checks a layout's step starts with, and the frame interval: RP_E_ARG if rig is NULL or
+ * rp_vo_check_frameset(fs, rig->n_cams) refuses fs; else RP_OK with *dt from rp_vo_frame_dt. */
+rp_status_t rp_vo_begin_step(const rp_rig_t *rig, const rp_frameset_t *fs, int64_t prev_utime,
+                             rp_real default_dt_s, rp_real *dt);
+
+/* RP_OK if fs can be processed by a layout over a rig of n_rig_cams cameras: no camera holds more
+ * than RP_MAX_FEATS_PER_CAM features and no camera outside the rig holds any. RP_E_ARG
+ * otherwise (or fs NULL). */
+rp_status_t rp_vo_check_frameset(const rp_frameset_t *fs, uint8_t n_rig_cams);
+
+/* The interval from the previous frame set (prev_utime, us) to fs: its timestamp difference if
+ * it is later, else default_dt_s (missing or repeated timestamps). *dt in s. RP_E_ARG (NULL). */
+rp_status_t rp_vo_frame_dt(const rp_frameset_t *fs, int64_t prev_utime, rp_real default_dt_s,
+                           rp_real *dt);
+
+/* est's pose, velocity and 6x6 pose covariance from the filter, translations (and their
+ * velocities) times t_scale (1: the filter's unit is the metre; gc: 1 / its map unit), and
+ * utime, frame, flags, n_landmarks as given. The other fields of est are left alone.
+ * RP_E_ARG (NULL). */
+rp_status_t rp_vo_fill_estimate(const rp_ekf_t *ekf, rp_real t_scale, int64_t utime,
+                                uint32_t frame, uint32_t flags, uint16_t n_landmarks,
+                                rp_estimate_t *est);
+
+/* A layout step's status from its filter's: RP_OK and RP_E_DIVERGED as they are, any other
+ * failure (too few features, an unusable prediction) RP_E_TOO_FEW. */
+rp_status_t rp_vo_step_status(rp_status_t filter_st);
+
+/* The bookkeeping a layout's step ends with, once est is filled: *prev_utime = fs->utime,
+ * est->n_gated = n_gated, ++*frame; returns rp_vo_step_status(filter_st) (RP_E_ARG if a pointer
+ * is NULL, nothing changed). */
+rp_status_t rp_vo_end_step(const rp_frameset_t *fs, uint16_t n_gated, rp_status_t filter_st,
+                           int64_t *prev_utime, uint32_t *frame, rp_estimate_t *est);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RP_VO_H */

@@ -1,0 +1,145 @@
+/*
+ * rp_vo.c - the plumbing every layout shares around its pose EKF (see rp_vo.h).
+ */
+#include <string.h>
+
+#include "rigpose/rp_vo.h"
+
+rp_status_t rp_vo_ekf_idle(rp_ekf_t *ekf, const rp_ekf_params_t *prm)
+{
+    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
+    for (int i = 0; i < RP_EKF_N; ++i) {
+        P0[i] = RP_C(1.0);
+    }
+    return rp_ekf_init(ekf, prm, x0, P0);
+}
+
+rp_status_t rp_vo_init_filter(const rp_rig_t *rig, const rp_ekf_params_t *prm, rp_ekf_t *ekf)
+{
+    const rp_status_t st = rp_rig_check(rig);
+    if (st != RP_OK) {
+        return st;
+    }
+    return prm && ekf ? rp_vo_ekf_idle(ekf, prm) : RP_E_ARG;
+}
+
+rp_status_t rp_vo_begin_step(const rp_rig_t *rig, const rp_frameset_t *fs, int64_t prev_utime,
+                             rp_real default_dt_s, rp_real *dt)
+{
+    if (!rig || rp_vo_check_frameset(fs, rig->n_cams) != RP_OK) {
+        return RP_E_ARG;
+    }
+    return rp_vo_frame_dt(fs, prev_utime, default_dt_s, dt);
+}
+
+/* Start variance of velocity component i (0..2 translation, 3..5 rotation). */
+static rp_real start_var(int i)
+{
+    return i < 3 ? RP_VO_START_SIGMA_V * RP_VO_START_SIGMA_V
+                 : RP_VO_START_SIGMA_W * RP_VO_START_SIGMA_W;
+}
+
+rp_status_t rp_vo_ekf_at_origin(rp_ekf_t *ekf, const rp_ekf_params_t *prm)
+{
+    rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
+    for (int i = 0; i < 6; ++i) {
+        P0[i] = RP_VO_ORIGIN_VAR;
+        P0[6 + i] = start_var(i);
+    }
+    return rp_ekf_init(ekf, prm, x0, P0);
+}
+
+rp_status_t rp_vo_ekf_from_pose(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real p[6],
+                                const rp_real cov[36], const rp_real p_prev[6], rp_real dt)
+{
+    if (!ekf || !prm || !p || !cov || !p_prev || !(dt > RP_C(0.0))) {
+        return RP_E_ARG;
+    }
+    const rp_real s2 = prm->sigma_px * prm->sigma_px;
+    rp_real x[RP_EKF_N], P0diag[RP_EKF_N];
+    for (int i = 0; i < 6; ++i) {
+        x[i] = p[i];
+        x[6 + i] = (p[i] - p_prev[i]) / dt;
+        P0diag[i] = cov[i * 6 + i] * s2;
+        P0diag[6 + i] = P0diag[i] / (dt * dt) + start_var(i);
+    }
+    const rp_status_t st = rp_ekf_init(ekf, prm, x, P0diag);
+    if (st != RP_OK) {
+        return st;
+    }
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            ekf->P[i * RP_EKF_N + j] = cov[i * 6 + j] * s2;
+        }
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_vo_check_frameset(const rp_frameset_t *fs, uint8_t n_rig_cams)
+{
+    if (!fs) {
+        return RP_E_ARG;
+    }
+    for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        if (fs->n[cam] > RP_MAX_FEATS_PER_CAM || (cam >= n_rig_cams && fs->n[cam] != 0)) {
+            return RP_E_ARG;
+        }
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_vo_frame_dt(const rp_frameset_t *fs, int64_t prev_utime, rp_real default_dt_s,
+                           rp_real *dt)
+{
+    if (!fs || !dt) {
+        return RP_E_ARG;
+    }
+    *dt = default_dt_s;
+    if (fs->utime > prev_utime) {
+        *dt = (rp_real)(fs->utime - prev_utime) * RP_C(1e-6);
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_vo_fill_estimate(const rp_ekf_t *ekf, rp_real t_scale, int64_t utime,
+                                uint32_t frame, uint32_t flags, uint16_t n_landmarks,
+                                rp_estimate_t *est)
+{
+    if (!ekf || !est) {
+        return RP_E_ARG;
+    }
+    est->utime = utime;
+    est->frame = frame;
+    for (int i = 0; i < 6; ++i) {
+        const rp_real si = i < 3 ? t_scale : RP_C(1.0);
+        est->p[i] = si * ekf->x[i];
+        est->v[i] = si * ekf->x[6 + i];
+        for (int j = 0; j < 6; ++j) {
+            const rp_real sj = j < 3 ? t_scale : RP_C(1.0);
+            est->cov[i * 6 + j] = si * sj * ekf->P[i * RP_EKF_N + j];
+        }
+    }
+    est->flags = flags;
+    est->n_landmarks = n_landmarks;
+    return RP_OK;
+}
+
+rp_status_t rp_vo_step_status(rp_status_t filter_st)
+{
+    if (filter_st == RP_OK || filter_st == RP_E_DIVERGED) {
+        return filter_st;
+    }
+    return RP_E_TOO_FEW;
+}
+
+rp_status_t rp_vo_end_step(const rp_frameset_t *fs, uint16_t n_gated, rp_status_t filter_st,
+                           int64_t *prev_utime, uint32_t *frame, rp_estimate_t *est)
+{
+    if (!fs || !prev_utime || !frame || !est) {
+        return RP_E_ARG;
+    }
+    *prev_utime = fs->utime;
+    est->n_gated = n_gated;
+    ++*frame;
+    return rp_vo_step_status(filter_st);
+}
