@@ -88,6 +88,17 @@ RP_LA_DECLARE(rp_lae_)
 #define rp_la_lstsq     RP_LA_PFX(lstsq)
 #define rp_la_svd       RP_LA_PFX(svd)
 
+/* Double precision on every build (rp_linalg_d.c, one plain-C implementation), for solvers whose
+ * normal equations need it whatever rp_real is (gc's window adjustment, rp_gcba.h says why).
+ * A is n x n row-major, n <= RP_LA_D_MAX_DIM.
+ * rp_la_chol_d: in-place Cholesky A = L L^T, the lower triangle read and overwritten by L (the
+ *   upper left as it was). RP_E_SINGULAR if A is not positive definite (a pivot <= 0 or NaN),
+ *   RP_E_ARG for NULL or n out of 1..RP_LA_D_MAX_DIM.
+ * rp_la_chol_solve_d: x = (L L^T)^-1 b from rp_la_chol_d's L; x may alias b. RP_E_ARG as above. */
+#define RP_LA_D_MAX_DIM 192
+rp_status_t rp_la_chol_d(double *A, int n);
+rp_status_t rp_la_chol_solve_d(const double *L, int n, const double *b, double *x);
+
 #ifdef __cplusplus
 }
 #endif

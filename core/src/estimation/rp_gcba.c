@@ -7,6 +7,8 @@
 #include "priv/rp_math.h"
 #include "rigpose/rp_camera.h"
 #include "rigpose/rp_gcba.h"
+#include "rigpose/rp_idmap.h"
+#include "rigpose/rp_linalg.h"
 
 #define rp_sqrt_d sqrt /* the adjustment is double throughout (rp_gcba.h) */
 
@@ -64,49 +66,7 @@ rp_status_t rp_gcba_add_keyframe(rp_gcba_t *ba, const rp_real p[6], const rp_gcb
 /* ---- small double helpers ---------------------------------------------------------------- */
 
 RP_DEFINE_INV3_SPD(inv3, double)
-
-/* In-place Cholesky of the n x n row-major A (lower triangle read and written); 0 if not SPD. */
-static int chol(double *A, int n)
-{
-    for (int j = 0; j < n; ++j) {
-        double d = A[j * n + j];
-        for (int k = 0; k < j; ++k) {
-            d -= A[j * n + k] * A[j * n + k];
-        }
-        if (!(d > 0.0)) {
-            return 0;
-        }
-        d = rp_sqrt_d(d);
-        A[j * n + j] = d;
-        for (int i = j + 1; i < n; ++i) {
-            double s = A[i * n + j];
-            for (int k = 0; k < j; ++k) {
-                s -= A[i * n + k] * A[j * n + k];
-            }
-            A[i * n + j] = s / d;
-        }
-    }
-    return 1;
-}
-
-/* Solve L L^T x = b (x may alias b). */
-static void chol_solve(const double *L, int n, const double *b, double *x)
-{
-    for (int i = 0; i < n; ++i) {
-        double s = b[i];
-        for (int k = 0; k < i; ++k) {
-            s -= L[i * n + k] * x[k];
-        }
-        x[i] = s / L[i * n + i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        double s = x[i];
-        for (int k = i + 1; k < n; ++k) {
-            s -= L[k * n + i] * x[k];
-        }
-        x[i] = s / L[i * n + i];
-    }
-}
+RP_STATIC_ASSERT(RP_GCBA_NP <= RP_LA_D_MAX_DIM, "the pose system fits rp_la_chol_d");
 
 /* ---- the window -------------------------------------------------------------------------- */
 
@@ -115,16 +75,11 @@ static const rp_gcba_kf_t *kf_at(const rp_gcba_t *ba, int k)
     return &ba->kf[(ba->head + k) % ba->cap];
 }
 
-static uint32_t hash_id(uint32_t id)
-{
-    return (id * 2654435761u) >> 7;
-}
-
 /* Landmark index of id, inserting it; -1 when the table is full. */
 static int lm_index(rp_gcba_t *ba, uint32_t id, uint8_t cam, uint16_t *n_lm)
 {
     const uint32_t mask = 2u * RP_GCBA_MAX_LM - 1u;
-    for (uint32_t h = hash_id(id) & mask, probe = 0; probe <= mask; ++probe, h = (h + 1) & mask) {
+    for (uint32_t h = rp_idmap_hash(id) & mask, probe = 0; probe <= mask; ++probe, h = (h + 1) & mask) {
         const uint16_t e = ba->hash[h];
         if (e == 0) {
             if (*n_lm >= RP_GCBA_MAX_LM) {
@@ -510,11 +465,11 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
     for (int i = 0; i < np; ++i) {
         ba->S[i * np + i] *= 1.0 + 1e-4;
     }
-    if (!chol(ba->S, np)) {
+    if (rp_la_chol_d(ba->S, np) != RP_OK) {
         ba->state = RP_GCBA_IDLE;
         return RP_E_SINGULAR;
     }
-    chol_solve(ba->S, np, ba->g, ba->dx);
+    (void)rp_la_chol_solve_d(ba->S, np, ba->g, ba->dx); /* S factored, np in range */
     memcpy(ba->x0, ba->x, sizeof(ba->x0));
     memcpy(ba->X0, ba->X, sizeof(double) * 3 * n_lm);
     memcpy(ba->ok0, ba->lm_ok, n_lm);
@@ -583,7 +538,7 @@ rp_status_t rp_gcba_finish(rp_gcba_t *ba, rp_gcba_result_t *res)
         return RP_E_DEGENERATE;
     }
     const double m = num / den;
-    if (!chol(ba->S, np)) {
+    if (rp_la_chol_d(ba->S, np) != RP_OK) {
         return RP_E_SINGULAR;
     }
     for (int i = 0; i < np; ++i) {
@@ -596,7 +551,7 @@ rp_status_t rp_gcba_finish(rp_gcba_t *ba, rp_gcba_result_t *res)
             ba->g[6 * (k - 1) + a] = (((double)kf->p[a] - (double)k0->p[a]) - 2.0 * m * dt) / den;
         }
     }
-    chol_solve(ba->S, np, ba->g, ba->dx);
+    (void)rp_la_chol_solve_d(ba->S, np, ba->g, ba->dx); /* S factored, np in range */
     double var = 0.0;
     for (int i = 0; i < np; ++i) {
         var += ba->g[i] * ba->dx[i];
