@@ -2,6 +2,7 @@
  * textures (several window sizes), checkerboard corners, the forward-backward check on an
  * occluded patch, new ids, top-up of emptied cells, tiny images, the state's size, and the
  * status codes of bad images. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -593,7 +594,6 @@ static void test_vector_equals_scalar(void **s)
     assert_true(total > 500);
 }
 
-/* The tracker's state: two pyramids and small row rings, no full-frame response map. */
 /* Feeding a tracker as rp_pipe does for a pair's second camera: adopted features become tracks
  * at their (Q16-rounded) pixels, only the owner camera's ids survive keep_owned, and the next
  * serial says which ids are born later. */
@@ -645,8 +645,68 @@ static void test_feeding_a_tracker(void **s)
     assert_status(rp_track_features(&fed, NULL, 1, &n), RP_E_ARG);
     assert_status(rp_track_next_serial(NULL, &k0), RP_E_ARG);
     assert_status(rp_track_current_pyr(&fed, NULL), RP_E_ARG);
+/* Every sub-pixel weight pair: the Q7 bilinear weights are each in 0..128, within 1/2 of the
+ * exact bilinear weight of the rounded fractions, and sum to exactly 128; and an all-255 patch
+ * interpolates to exactly 255 x 128 at every pair (no int16 lane overflows: UBSan would stop
+ * the test). fx, fy run over every Q16 fraction that rounds to a distinct Q7 value and its
+ * neighbours (the rounding edges), all 65536 fx values for the corner rows b = 0, 1, 64, 127,
+ * 128. */
+static void check_weight_pair(int32_t fx, int32_t fy)
+{
+    v8_t w[4];
+    weights_q7(fx, fy, w);
+    int16_t e[4][8];
+    int sum = 0;
+    const double a = (double)((fx + 256) >> 9), b = (double)((fy + 256) >> 9);
+    const double exact[4] = {(128 - a) * (128 - b) / 128, a * (128 - b) / 128,
+                             (128 - a) * b / 128, a * b / 128};
+    for (int i = 0; i < 4; ++i) {
+        v8_st(e[i], w[i]);
+        assert_true(e[i][0] >= 0 && e[i][0] <= 128);
+        assert_true(fabs((double)e[i][0] - exact[i]) <= 0.5 + 1e-12);
+        sum += e[i][0];
+    }
+    assert_int_equal(sum, 128);
+    /* a saturated patch: 2 rows x 9 columns read, 1 row x 8 columns written */
+    uint8_t src[2 * 16];
+    memset(src, 255, sizeof src);
+    int16_t out[8], q3[8];
+    interp_q7_q3(src, 16, 1, 8, 8, w, 0, out, q3);
+    for (int k = 0; k < 8; ++k) {
+        assert_int_equal(out[k], 255 * 128);
+        assert_int_equal(q3[k], (255 * 128 + 8) >> 4);
+    }
 }
 
+static void test_weights_every_subpixel_pair(void **s)
+{
+    (void)s;
+    for (int32_t qa = 0; qa <= 128; ++qa) {
+        for (int32_t qb = 0; qb <= 128; ++qb) {
+            for (int da = -1; da <= 1; ++da) {
+                for (int db = -1; db <= 1; ++db) {
+                    const int32_t fx = qa * 512 - 256 + da, fy = qb * 512 - 256 + db;
+                    if (fx >= 0 && fx <= 0xffff && fy >= 0 && fy <= 0xffff) {
+                        check_weight_pair(fx, fy);
+                    }
+                    if (qa * 512 <= 0xffff && qb * 512 <= 0xffff) {
+                        check_weight_pair(qa * 512, qb * 512);
+                    }
+                }
+            }
+        }
+    }
+    static const int32_t rows[5] = {0, 1, 64, 127, 128};
+    for (int r = 0; r < 5; ++r) {
+        const int32_t fy = rows[r] * 512 > 0xffff ? 0xffff : rows[r] * 512;
+        for (int32_t fx = 0; fx <= 0xffff; ++fx) {
+            check_weight_pair(fx, fy);
+            check_weight_pair(fy, fx);
+        }
+    }
+}
+
+/* The tracker's state: two pyramids and small row rings, no full-frame response map. */
 static void test_state_size(void **s)
 {
     (void)s;
@@ -674,6 +734,7 @@ int main(void)
         cmocka_unit_test(test_window_sizes),
         cmocka_unit_test(test_tiny_image),
         cmocka_unit_test(test_topup_refills_emptied_cells),
+        cmocka_unit_test(test_weights_every_subpixel_pair),
         cmocka_unit_test(test_state_size),
         cmocka_unit_test(test_vector_equals_scalar),
     };

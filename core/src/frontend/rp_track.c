@@ -373,20 +373,21 @@ rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg)
 
 /* ---- Lucas-Kanade --------------------------------------------------------------------------- */
 
-/* Q7 bilinear weights of the fractional part (Q16) of a position: rounded, summing to exactly
- * 128, so that 8-bit grey levels interpolate in int16 lanes (255 * 128 = 32640 < 2^15). Used
- * for J, sampled at every iteration; positions resolve to 1/128 px there (the estimate itself
- * stays Q16). */
+/* Q7 bilinear weights of the fractional part (Q16) of a position, with a, b the fractions in Q7
+ * (0..128): w0 (top left) + w1 (top right) = 128 - b and w2 + w3 = b exactly, w1 and w3 the
+ * rounded a (128 - b) / 128 and a b / 128. So every weight is in 0..128, each within 1/2 of
+ * its exact value, and the four sum to exactly 128: 8-bit grey levels interpolate in int16
+ * lanes (at most 255 * 128 = 32640 < 2^15). Used for J, sampled at every iteration; positions
+ * resolve to 1/128 px there (the estimate itself stays Q16). */
 static void weights_q7(int32_t fx_q16, int32_t fy_q16, v8_t w[4])
 {
     const int32_t a = (fx_q16 + (1 << 8)) >> 9, b = (fy_q16 + (1 << 8)) >> 9; /* Q7, 0..128 */
-    const int16_t w0 = (int16_t)(((128 - a) * (128 - b) + 64) >> 7);
     const int16_t w1 = (int16_t)((a * (128 - b) + 64) >> 7);
-    const int16_t w2 = (int16_t)(((128 - a) * b + 64) >> 7);
-    w[0] = v8_set(w0);
+    const int16_t w3 = (int16_t)((a * b + 64) >> 7);
+    w[0] = v8_set((int16_t)(128 - b - w1));
     w[1] = v8_set(w1);
-    w[2] = v8_set(w2);
-    w[3] = v8_set((int16_t)(128 - w0 - w1 - w2));
+    w[2] = v8_set((int16_t)(b - w3));
+    w[3] = v8_set(w3);
 }
 
 /* Window rows are padded to a multiple of 8 pixels so that every inner loop below runs over whole
