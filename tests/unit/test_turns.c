@@ -3,7 +3,8 @@
  * continuous function rp_sim_turn_pose sampled at the frame times, deterministic per (seed,
  * run); the yaw passes +90, 180 and -90 degrees (so the paper's beta passes +-90 degrees) in a
  * default turn run of RP_SIM_TURN_FRAMES frames; the rig stays well inside the shell; every
- * camera sees features in every frame; per-frame motion stays in the paper's ranges.
+ * camera sees features in every frame; per-frame motion stays in the paper's ranges; the pitch
+ * control turns as far with beta far from +-90 degrees.
  *
  * Whether the estimators hold through the turn is not asserted here (today some do not: the
  * paper's angles are singular at beta = +-90 degrees); the command that measures it is in
@@ -135,6 +136,27 @@ static void yaw_passes_plus_and_minus_90_and_180_degrees(void **state)
     assert_true(right > 0 && right < N_RUNS); /* both directions occur */
 }
 
+/* The control: the same turn about x keeps the paper's beta far from +-90 degrees, and its
+ * angle is the turn's (the rotation about x of cam1's forward axis). */
+static void pitch_turns_as_far_without_the_singularity(void **state)
+{
+    (void)state;
+    rp_sim_cfg_t cfg;
+    turn_cfg(&cfg, RP_SIM_TURN_FRAMES);
+    cfg.motion = RP_SIM_MOTION_PITCH;
+    for (uint32_t r = 0; r < N_RUNS; ++r) {
+        rp_sim_run_t sr;
+        assert_int_equal(rp_sim_run_init(&sr, &cfg, 1, r), 0);
+        double beta_max = 0.0;
+        for (uint32_t j = 1; j < cfg.n_frames; ++j) {
+            beta_max = fmax(beta_max, fabs(sr.truth[6u * j + 4]));
+        }
+        assert_true(beta_max < 0.45); /* |sin b| <= |sin g_w| + |sin b_w| <= 2 sin(0.2) */
+        assert_true(fabs(rp_sim_turn_yaw(&sr, (cfg.n_frames - 1) * cfg.frame_dt)) > 2.0 * PI - 0.3);
+        rp_sim_run_free(&sr);
+    }
+}
+
 static void rig_stays_inside_the_shell_and_moves_like_the_paper(void **state)
 {
     (void)state;
@@ -207,6 +229,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(truth_is_the_continuous_pose_sampled_at_frame_times),
         cmocka_unit_test(yaw_passes_plus_and_minus_90_and_180_degrees),
+        cmocka_unit_test(pitch_turns_as_far_without_the_singularity),
         cmocka_unit_test(rig_stays_inside_the_shell_and_moves_like_the_paper),
         cmocka_unit_test(every_camera_sees_features_in_every_frame),
     };
