@@ -57,8 +57,8 @@ typedef enum {
      * (1.05 rad/s = 0.035 rad per frame at 30 Hz: about the paper's largest per-frame rotation
      * |(0.02, 0.02, 0.02)| = 0.035 rad, and the KITTI clip's 98 degrees in 51 frames at 10 Hz)
      * the yaw passes 90 degrees at frame 50, 180 at frame 95, 270 (= -90) at frame 140 and 360
-     * at frame 185, give or take the wobble; the wobble's per-frame increments reach about
-     * 13 mm and 0.02 rad, the paper's ranges. */
+     * at frame 185, give or take the wobble; the per-frame steps reach about 11 mm per axis and
+     * (turn and wobble together) 0.047 rad (test_turns.c), in the paper's ranges. */
     RP_SIM_MOTION_TURN = 1,
     /* The same turn about the world's x axis (cam1's x at frame 0: right), R(t) = Rx(psi) Rw:
      * a pitch through the same angles at the same rates, where the paper's angles are not
