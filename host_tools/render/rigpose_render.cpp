@@ -9,7 +9,9 @@
  *   camK/NNNNNN.png  8-bit grey images
  * Column camK is rig camera K in rp_sim.h's order: cam0 = cam1 (front), cam1 = cam2 (right),
  * cam2 = cam3 (back), cam3 = cam4 (left), cam4 = cam1's stereo partner, cam5 = cam3's.
- * The motion is run `--run` of rigpose-sim's experiment `--seed` (the paper's Table 1 motion).
+ * The motion is run `--run` of rigpose-sim's experiment `--seed` (the paper's Table 1 motion,
+ * or with --motion turn / pitch rigpose-sim's turn); --moving-object adds an independently
+ * moving textured sphere in front of one camera (rp_render.hpp, MovingObject).
  */
 #include <sys/stat.h>
 
@@ -51,16 +53,27 @@ static bool write_rig_yaml(const std::string &path, const rpr::Sequence &seq)
     }
     const rp_rig_t &rig = seq.rig();
     const rpr::SeqCfg &c = seq.cfg();
+    /* Only what differs from the defaults, so that default runs write the same bytes. */
+    std::string extra;
+    if (c.motion) {
+        extra += c.motion == 1 ? "  motion: turn\n" : "  motion: pitch\n";
+    }
+    if (c.moving_object) {
+        char b[96];
+        std::snprintf(b, sizeof b, "  moving_object: {camera: %d, cover: %g}\n", c.object_cam,
+                      c.object_cover);
+        extra += b;
+    }
     std::fprintf(f,
                  "# Written by rigpose-render: the paper's six-camera rig (DESIGN.md). Schema:\n"
                  "# config/README.md. Camera order = rig index; device = column of frames.csv.\n"
                  "version: 1\n\n"
                  "meta:\n  tool: rigpose-render\n  seed: %llu\n  run: %u\n  frames: %u\n"
-                 "  noise_grey: %g\n  blur_sigma: %g\n  brightness: %g\n  scene: %s\n\n"
+                 "  noise_grey: %g\n  blur_sigma: %g\n  brightness: %g\n  scene: %s\n%s\n"
                  "source:\n  kind: replay\n  replay_index: frames.csv\n  realtime: false\n\n"
                  "cameras:\n",
                  (unsigned long long)c.seed, c.run, c.frames, c.noise_grey, c.blur_sigma,
-                 c.brightness, c.points ? "points" : (c.flat ? "sphere" : "shell"));
+                 c.brightness, c.points ? "points" : (c.flat ? "sphere" : "shell"), extra.c_str());
     for (int k = 0; k < rig.n_cams && k < 6; ++k) {
         const rp_rig_cam_t &rc = rig.cam[k];
         std::fprintf(f,

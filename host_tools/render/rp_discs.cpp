@@ -136,7 +136,7 @@ bool DiscScene::pick(const double C[3], const double d[3], size_t *idx, double X
 }
 
 void DiscScene::render(const rp_rig_t &rig, int k, const double d[3], const double R[9],
-                       const CamRays &rays, cv::Mat *out) const
+                       const CamRays &rays, cv::Mat *out, const ObjView *ov) const
 {
     const rp_rig_cam_t &rc = rig.cam[k];
     double C[3], M[9];
@@ -226,6 +226,17 @@ void DiscScene::render(const rp_rig_t &rig, int k, const double d[3], const doub
                     look(s.i, a, b, &alb, &alpha);
                     float &dst = buf[px + (size_t)q];
                     dst = alpha * alb + (1.0f - alpha) * dst;
+                }
+            }
+        }
+    }
+    if (ov) { /* the moving object, in front of every disc (it stays inside the shell) */
+        for (size_t px = 0; px < (size_t)rays.w * rays.h; ++px) {
+            const float *r = &rays.ray[px * per_px * 3u];
+            for (int q = 0; q < per_px; ++q, r += 3) {
+                double t;
+                if (r[2] != 0.0f && ov->hit_t(r, &t)) {
+                    buf[px * per_px + (size_t)q] = ov->albedo_at(r, t);
                 }
             }
         }

@@ -284,8 +284,119 @@ void cam_in_world(const rp_rig_t &rig, int k, const double d[3], const double R[
     }
 }
 
+/* ---- the moving object ------------------------------------------------------------------ */
+
+bool ObjView::hit_t(const float r[3], double *t) const
+{
+    const double b = r[0] * c[0] + r[1] * c[1] + r[2] * c[2];
+    const double cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    const double disc = b * b - (cc - radius * radius);
+    if (!(disc >= 0.0)) {
+        return false;
+    }
+    const double tt = b - std::sqrt(disc);
+    if (!(tt > 0.0)) {
+        return false;
+    }
+    *t = tt;
+    return true;
+}
+
+float ObjView::albedo_at(const float r[3], double t) const
+{
+    const double X[3] = {t * r[0] - c[0], t * r[1] - c[1], t * r[2] - c[2]};
+    double x[3]; /* Q^T X: the object's own frame */
+    for (int i = 0; i < 3; ++i) {
+        x[i] = Q[i] * X[0] + Q[3 + i] * X[1] + Q[6 + i] * X[2];
+    }
+    return obj->albedo(x);
+}
+
+namespace {
+
+/* Rotation by angle a about unit axis u (Rodrigues), row-major. */
+void axis_angle(const double u[3], double a, double R[9])
+{
+    const double c = std::cos(a), s = std::sin(a), v = 1.0 - c;
+    R[0] = c + u[0] * u[0] * v;        R[1] = u[0] * u[1] * v - u[2] * s; R[2] = u[0] * u[2] * v + u[1] * s;
+    R[3] = u[1] * u[0] * v + u[2] * s; R[4] = c + u[1] * u[1] * v;        R[5] = u[1] * u[2] * v - u[0] * s;
+    R[6] = u[2] * u[0] * v - u[1] * s; R[7] = u[2] * u[1] * v + u[0] * s; R[8] = c + u[2] * u[2] * v;
+}
+
+void mul3(const double A[9], const double B[9], double C[9])
+{
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+        }
+    }
+}
+
+void random_unit(Stream &st, double u[3])
+{
+    const double z = 2.0 * st.next() - 1.0, ph = 2.0 * M_PI * st.next();
+    const double rho = std::sqrt(std::max(0.0, 1.0 - z * z));
+    u[0] = rho * std::cos(ph);
+    u[1] = rho * std::sin(ph);
+    u[2] = z;
+}
+
+} /* namespace */
+
+MovingObject::MovingObject(const ObjectCfg &cfg, const rp_camera_t &cam)
+    : cfg_(cfg), base_(key(cfg.seed, DOM_ALBEDO)), stain1_(key(cfg.seed, DOM_STAIN1)),
+      stain2_(key(cfg.seed, DOM_STAIN2))
+{
+    const double W = cam.width, H = cam.height, fx = (double)cam.fx, fy = (double)cam.fy;
+    const double rho_px = std::sqrt(cfg.cover * W * H / M_PI); /* the disc's radius, px */
+    const double a = rho_px / fx;
+    radius_ = cfg.depth * a / std::sqrt(1.0 + a * a); /* its silhouette's half-angle is atan(a) */
+    Stream st{key(cfg.seed, 0x0B1EC7)};
+    amp_[0] = 0.6 * std::max(0.0, 0.5 * W - rho_px) * cfg.depth / fx;
+    amp_[1] = 0.6 * std::max(0.0, 0.5 * H - rho_px) * cfg.depth / fy;
+    w_[0] = 2.0 * M_PI / (3.0 + 2.0 * st.next());
+    w_[1] = 2.0 * M_PI / (2.0 + 2.0 * st.next());
+    ph_[0] = 2.0 * M_PI * st.next();
+    ph_[1] = 2.0 * M_PI * st.next();
+    random_unit(st, axis_);
+    double u0[3];
+    random_unit(st, u0);
+    axis_angle(u0, 2.0 * M_PI * st.next(), Q0_);
+    tex_scale_ = 0.8335 / cfg.depth; /* the scene's texture scale at the shell's mid radius */
+}
+
+void MovingObject::rel_pose(double t, double p[3], double Q[9]) const
+{
+    p[0] = amp_[0] * std::sin(w_[0] * t + ph_[0]);
+    p[1] = amp_[1] * std::sin(w_[1] * t + ph_[1]);
+    p[2] = cfg_.depth;
+    double S[9];
+    axis_angle(axis_, spin_ * t, S);
+    mul3(S, Q0_, Q);
+}
+
+float MovingObject::albedo(const double x[3]) const
+{
+    /* The scene's albedo formula (Scene::Scene) at the scaled point, with the object's seeds. */
+    const double P[3] = {tex_scale_ * x[0], tex_scale_ * x[1], tex_scale_ * x[2]};
+    const int n_oct = 6;
+    double amp_sum = 0.0, f = 0.0;
+    for (int o = 0; o < n_oct; ++o) {
+        amp_sum += std::sqrt(std::ldexp(1.0, -o));
+        const double inv_l = std::ldexp(1.0, o) / 0.25;
+        const double off = 17.31 * o;
+        f += std::sqrt(std::ldexp(1.0, -o)) *
+             base_(P[0] * inv_l + off, P[1] * inv_l - off, P[2] * inv_l + 0.5 * off);
+    }
+    f *= 1.8 / amp_sum;
+    const double s1 = smoothstep(0.08, 0.16, stain1_(P[0] / 0.05, P[1] / 0.05, P[2] / 0.05));
+    const double s2 = smoothstep(0.15, 0.22, stain2_(P[0] / 0.015, P[1] / 0.015, P[2] / 0.015));
+    const double a = 0.5 + 0.4 * f - 0.16 * s1 + 0.16 * s2;
+    return (float)std::min(0.97, std::max(0.03, a));
+}
+
 void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double d[3],
-                   const double R[9], const CamRays &rays, cv::Mat *out)
+                   const double R[9], const CamRays &rays, cv::Mat *out, const ObjView *ov)
 {
     double C[3], M[9];
     cam_in_world(rig, k, d, R, C, M);
@@ -306,8 +417,11 @@ void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double 
                     for (int i = 0; i < 3; ++i) {
                         dw[i] = M[3 * i] * r[0] + M[3 * i + 1] * r[1] + M[3 * i + 2] * r[2];
                     }
-                    double t, uh[3];
-                    if (scene.intersect(C, dw, &t, uh)) {
+                    double t, uh[3], t_obj;
+                    const bool hit = scene.intersect(C, dw, &t, uh);
+                    if (ov && ov->hit_t(r, &t_obj) && (!hit || t_obj < t)) {
+                        acc += ov->albedo_at(r, t_obj); /* the object, in front */
+                    } else if (hit) {
                         acc += scene.albedo(uh);
                     }
                 }
@@ -350,8 +464,19 @@ Sequence::Sequence(const SeqCfg &cfg) : cfg_(cfg)
         why_ = "frames >= 1, ss 1..8, face_px 64..8192";
         return;
     }
+    if (cfg.motion < 0 || cfg.motion > 2) {
+        why_ = "unknown motion";
+        return;
+    }
+    if (cfg.moving_object &&
+        (cfg.object_cam < 0 || cfg.object_cam >= RP_SIM_NCAMS ||
+         !(cfg.object_cover > 0.0 && cfg.object_cover <= 0.6))) {
+        why_ = "moving object: camera 0..5, cover in (0, 0.6]";
+        return;
+    }
     rp_sim_cfg_t sc;
     rp_sim_default_cfg(&sc);
+    sc.motion = (rp_sim_motion_t)cfg.motion;
     sc.width = (uint16_t)cfg.width;
     sc.height = (uint16_t)cfg.height;
     sc.focal_px = cfg.focal_px > 0.0 ? cfg.focal_px : 800.0 * cfg.width / 640.0;
@@ -393,6 +518,25 @@ Sequence::Sequence(const SeqCfg &cfg) : cfg_(cfg)
         why_ = "bad camera parameters";
         return;
     }
+    if (cfg.moving_object) {
+        ObjectCfg oc;
+        oc.seed = key(cfg.seed, cfg.run, 0x0B1EC7);
+        oc.cam = cfg.object_cam;
+        oc.cover = cfg.object_cover;
+        object_.reset(new MovingObject(oc, rig_.cam[oc.cam].cam));
+        obj_c_.assign(3u * cfg.frames, 0.0);
+        obj_Q_.assign(9u * cfg.frames, 0.0);
+        for (uint32_t j = 0; j < cfg.frames; ++j) {
+            const Pose ps = pose(j);
+            double C[3], M[9], p[3], Qr[9];
+            cam_in_world(rig_, oc.cam, ps.d, ps.R, C, M);
+            object_->rel_pose(j * frame_dt_, p, Qr);
+            for (int i = 0; i < 3; ++i) {
+                obj_c_[3u * j + i] = C[i] + M[3 * i] * p[0] + M[3 * i + 1] * p[1] + M[3 * i + 2] * p[2];
+            }
+            mul3(M, Qr, &obj_Q_[9u * j]);
+        }
+    }
     if (cfg.points) {
         DiscCfg dc;
         dc.radius_m = cfg.disc_radius;
@@ -423,10 +567,12 @@ void Sequence::render(uint32_t j, int k, cv::Mat *out8) const
 {
     const Pose p = pose(j);
     cv::Mat alb;
+    ObjView ov;
+    const ObjView *ovp = object_view(j, k, &ov) ? &ov : nullptr;
     if (discs_) {
-        discs_->render(rig_, k, p.d, p.R, rays_[0], &alb);
+        discs_->render(rig_, k, p.d, p.R, rays_[0], &alb, ovp);
     } else {
-        render_albedo(*scene_, rig_, k, p.d, p.R, rays_[0], &alb);
+        render_albedo(*scene_, rig_, k, p.d, p.R, rays_[0], &alb, ovp);
     }
     Effects fx;
     fx.gain = 1.0 + cfg_.brightness * std::sin(2.0 * M_PI * j / 40.0 + k);
@@ -434,6 +580,27 @@ void Sequence::render(uint32_t j, int k, cv::Mat *out8) const
     fx.noise_grey = cfg_.noise_grey;
     fx.noise_key = key(cfg_.seed, cfg_.run, j, (uint64_t)k + 1u);
     finish_image(alb, fx, out8);
+}
+
+bool Sequence::object_view(uint32_t j, int k, ObjView *ov) const
+{
+    if (!object_ || j >= cfg_.frames || k < 0 || k >= rig_.n_cams) {
+        return false;
+    }
+    const Pose p = pose(j);
+    double C[3], M[9];
+    cam_in_world(rig_, k, p.d, p.R, C, M);
+    const double *oc = &obj_c_[3u * j], *Q = &obj_Q_[9u * j];
+    const double rel[3] = {oc[0] - C[0], oc[1] - C[1], oc[2] - C[2]};
+    ov->obj = object_.get();
+    ov->radius = object_->radius();
+    for (int i = 0; i < 3; ++i) { /* c = M^T rel, Q_cam = M^T Q */
+        ov->c[i] = M[i] * rel[0] + M[3 + i] * rel[1] + M[6 + i] * rel[2];
+        for (int q = 0; q < 3; ++q) {
+            ov->Q[3 * i + q] = M[i] * Q[q] + M[3 + i] * Q[3 + q] + M[6 + i] * Q[6 + q];
+        }
+    }
+    return true;
 }
 
 bool Sequence::world_point_at(uint32_t j, int k, const rp_real uv[2], double X[3]) const

@@ -107,6 +107,7 @@ struct DiscCfg {
 };
 
 struct CamRays;
+struct ObjView;
 
 class DiscScene {
 public:
@@ -126,9 +127,10 @@ public:
      * least half opaque: its index and the crossing point X (world). false if none. For ground
      * truth of tracked features (a brute-force search over all discs). */
     bool pick(const double C[3], const double d[3], size_t *idx, double X[3]) const;
-    /* As render_albedo: the albedo image of rig camera k at pose (d, R). */
+    /* As render_albedo: the albedo image of rig camera k at pose (d, R); ov: a moving object
+     * in front (optional). */
     void render(const rp_rig_t &rig, int k, const double d[3], const double R[9],
-                const CamRays &rays, cv::Mat *out) const;
+                const CamRays &rays, cv::Mat *out, const ObjView *ov = nullptr) const;
 
 private:
     struct Disc {
@@ -139,6 +141,22 @@ private:
     DiscCfg cfg_;
     GradNoise noise_;
     std::vector<Disc> discs_;
+};
+
+/* A moving object as one camera sees it in one frame: a textured sphere of radius `radius` (m)
+ * centred at c (camera frame, m), its axes Q (columns, camera frame, row-major). A sub-pixel
+ * sample whose ray meets it takes the object's albedo at the hit (the object is always nearer
+ * than the scene: it stays inside the shell's inner radius, see MovingObject). */
+class MovingObject;
+struct ObjView {
+    const MovingObject *obj = nullptr;
+    double c[3] = {0, 0, 0};
+    double Q[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    double radius = 0.0;
+    /* Ray (camera frame, unit) against the sphere: distance t (m) to the nearer hit. */
+    bool hit_t(const float r[3], double *t) const;
+    /* The object's albedo where ray r meets it at distance t. */
+    float albedo_at(const float r[3], double t) const;
 };
 
 /* Per-camera rays: for each pixel (row-major) ss x ss sub-pixel rays in the camera frame
@@ -159,7 +177,43 @@ void cam_in_world(const rp_rig_t &rig, int k, const double d[3], const double R[
 /* Image of rig camera k at pose (d, R) (cam1 in the world; R row-major): a CV_32F image of
  * albedo values (0..1); pixels whose ray misses are 0. */
 void render_albedo(const Scene &scene, const rp_rig_t &rig, int k, const double d[3],
-                   const double R[9], const CamRays &rays, cv::Mat *out);
+                   const double R[9], const CamRays &rays, cv::Mat *out,
+                   const ObjView *ov = nullptr);
+
+/* An independently moving textured object (rigpose-render --moving-object): a sphere whose
+ * radius makes it cover `cover` of camera `cam`'s image when centred in it at `depth` (m). Its
+ * path is set in that camera's frame, so that it stays in view whatever the rig does: its centre
+ * at (x(t), y(t), depth), x and y single sinusoids (periods U[3, 5] s and U[2, 4] s, random
+ * phases, amplitudes 0.6 of the room the image leaves around the object), the sphere spinning at
+ * 0.6 rad/s about a random axis. In the world it moves with the camera plus that drift and spin:
+ * like a vehicle alongside, its image motion agrees neither with the static scene nor with the
+ * rig. Its albedo is the scene's kind of texture (gradient noise and stains, rp_render.cpp),
+ * scaled by r_mid / depth so that it has the scene's scale in pixels. Deterministic per seed. */
+struct ObjectCfg {
+    uint64_t seed = 1;
+    int cam = 0;          /* rig camera whose view it covers */
+    double cover = 0.30;  /* fraction of that camera's image (when centred) */
+    double depth = 0.45;  /* m, along that camera's axis */
+};
+
+class MovingObject {
+public:
+    MovingObject(const ObjectCfg &cfg, const rp_camera_t &cam);
+    const ObjectCfg &cfg() const { return cfg_; }
+    double radius() const { return radius_; }
+    /* Centre p (m) and axes Q (columns, row-major) in the chosen camera's frame at time t (s). */
+    void rel_pose(double t, double p[3], double Q[9]) const;
+    /* Albedo (0..1) at point x (m) of the object's own frame, |x| = radius. */
+    float albedo(const double x[3]) const;
+
+private:
+    ObjectCfg cfg_;
+    double radius_ = 0.0;
+    double amp_[2] = {0, 0}, w_[2] = {0, 0}, ph_[2] = {0, 0};
+    double axis_[3] = {0, 0, 1}, spin_ = 0.6, Q0_[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    double tex_scale_ = 1.0;
+    GradNoise base_, stain1_, stain2_;
+};
 
 /* Image degradations, all optional, applied to the albedo image in this order:
  * gain (brightness change) and offset, Gaussian blur, Gaussian grey-level noise, rounding to
@@ -207,6 +261,10 @@ struct SeqCfg {
     bool points = false;         /* the "points" scene (DiscScene) instead of the shell */
     double disc_radius = 0.012;  /* m, points scene */
     int face_px = 1024;
+    int motion = 0;              /* rp_sim_motion_t: 0 the paper's, 1 turn, 2 pitch (rp_sim.h) */
+    bool moving_object = false;  /* an independently moving object (MovingObject) */
+    int object_cam = 0;          /* the rig camera whose view it covers */
+    double object_cover = 0.30;  /* the fraction of that view it covers */
 };
 
 class Sequence {
@@ -233,6 +291,11 @@ public:
     int64_t utime(uint32_t j) const;
     /* 8-bit image of rig camera k at frame j, with the configured degradations. */
     void render(uint32_t j, int k, cv::Mat *out8) const;
+    /* The moving object as rig camera k sees it at frame j (false: no object). */
+    bool object_view(uint32_t j, int k, ObjView *ov) const;
+    /* The moving object's centre (world, m) at frame j; only with cfg().moving_object. */
+    const double *object_centre(uint32_t j) const { return &obj_c_[3u * j]; }
+    const MovingObject *object() const { return object_.get(); }
 
 private:
     SeqCfg cfg_;
@@ -244,6 +307,8 @@ private:
     std::unique_ptr<DiscScene> discs_;
     std::vector<double> cloud_;
     std::vector<CamRays> rays_;
+    std::unique_ptr<MovingObject> object_;
+    std::vector<double> obj_c_, obj_Q_; /* per frame: centre and axes in the world */
 };
 
 /* The feature-level simulation's model on the rendered surface (a reference for runs from

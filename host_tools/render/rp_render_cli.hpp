@@ -31,7 +31,14 @@ inline void cli_usage(FILE *out)
                  "  --flat           sphere of radius 0.8335 m instead of the bumpy shell\n"
                  "  --points         rp_sim's own 10,000 points as textured discs instead of the shell\n"
                  "  --disc-r M       disc radius of --points, m (default 0.012)\n"
-                 "  --face-px N      texture cube map face side (default 1024)\n");
+                 "  --face-px N      texture cube map face side (default 1024)\n"
+                 "  --motion M       paper (default): rigpose-sim's run; turn: a turn on the spot,\n"
+                 "                   0.035 rad/frame of yaw (use --frames 200 for the full turn);\n"
+                 "                   pitch: the same about cam1's x axis (rp_sim.h)\n"
+                 "  --moving-object  add an independently moving textured sphere covering\n"
+                 "                   --object-cover of camera --object-cam's view\n"
+                 "  --object-cam K   rig camera 0..5 (rp_sim.h's order; default 0 = cam1)\n"
+                 "  --object-cover F fraction of that view, 0..0.6 (default 0.30)\n");
 }
 
 /* Parses the option at argv[i] (and its value) into cfg. Returns the number of arguments used,
@@ -47,10 +54,24 @@ inline int cli_parse(int argc, char **argv, int i, SeqCfg *cfg)
         cfg->points = true;
         return 1;
     }
+    if (!std::strcmp(o, "--moving-object")) {
+        cfg->moving_object = true;
+        return 1;
+    }
+    if (!std::strcmp(o, "--motion")) {
+        const char *v = i + 1 < argc ? argv[i + 1] : "";
+        if (!std::strcmp(v, "paper") || !std::strcmp(v, "turn") || !std::strcmp(v, "pitch")) {
+            cfg->motion = !std::strcmp(v, "paper") ? 0 : !std::strcmp(v, "turn") ? 1 : 2;
+            return 2;
+        }
+        std::fprintf(stderr, "bad value for --motion: '%s' (paper, turn or pitch)\n", v);
+        return -1;
+    }
     static const char *const with_value[] = {"--seed",  "--run",        "--frames", "--width",
                                              "--height", "--focal-px",  "--dist",   "--ss",
                                              "--noise-grey", "--blur",  "--brightness",
-                                             "--face-px", "--disc-r"};
+                                             "--face-px", "--disc-r", "--object-cam",
+                                             "--object-cover"};
     bool known = false;
     for (const char *w : with_value) {
         known = known || !std::strcmp(o, w);
@@ -106,6 +127,12 @@ inline int cli_parse(int argc, char **argv, int i, SeqCfg *cfg)
         } else if (!std::strcmp(o, "--brightness")) {
             bad = bad || x < 0 || x > 0.9;
             cfg->brightness = x;
+        } else if (!std::strcmp(o, "--object-cam")) {
+            bad = bad || x < 0 || x > 5 || x != std::floor(x);
+            cfg->object_cam = (int)x;
+        } else if (!std::strcmp(o, "--object-cover")) {
+            bad = bad || !(x > 0 && x <= 0.6);
+            cfg->object_cover = x;
         } else if (!std::strcmp(o, "--disc-r")) {
             bad = bad || !(x > 0 && x <= 0.05);
             cfg->disc_radius = x;

@@ -10,8 +10,14 @@
  * depend on the thread count (only the timings do).
  *
  * usage: rigpose-sim [--methods LIST] [--runs N] [--frames N] [--seed S] [--focal-px F]
- *                    [--noise-px S] [--threads N] [--json] [--help]
+ *                    [--noise-px S] [--motion paper|turn] [--threads N] [--json] [--help]
  *        rigpose-sim --layout-study [FILE] [same options]
+ *
+ * --motion turn (rp_sim.h) runs a turn on the spot instead of the paper's random walk (200
+ * frames unless --frames: one full turn) and adds to each row the rotation error as one angle
+ * (the geodesic distance between the estimated and the true rotation, which does not depend on
+ * the angles' parametrisation), overall, within 10 degrees of yaw +-90 (where the paper's
+ * angles are singular) and its largest frame.
  *
  * The layout study runs the selected methods (default gc,rc; 20 runs) once per candidate
  * placement of cam2 and cam4 (from FILE, format in rp_sim_layout.h, or the built-in grid) and
@@ -287,7 +293,10 @@ typedef struct {
     int no_refine;
     int layout_study;         /* --layout-study given */
     const char *layout_file;  /* its FILE, or NULL for the built-in grid */
-    int methods_given, runs_given;
+    int methods_given, runs_given, frames_given;
+    rp_sim_motion_t motion;
+    double max_rot;           /* --max-rot DEG (rad here): fail above it; 0: no check */
+    int64_t trace_run;        /* --trace R: per-frame lines of run R on stderr; -1: none, -2: all */
 } opts_t;
 
 static void usage(FILE *out, const char *argv0)
@@ -308,6 +317,18 @@ static void usage(FILE *out, const char *argv0)
             "  --focal-px F     fx = fy in pixels, principal point at the image centre "
             "(default 800)\n"
             "  --noise-px S     Gaussian pixel noise sigma (default 0.5)\n"
+            "  --motion M       paper (default): the paper's random per-frame motion; turn: a\n"
+            "                   turn on the spot, 0.035 rad/frame of yaw plus a smooth wobble\n"
+            "                   (rp_sim.h), 200 frames unless --frames; adds the rotation error\n"
+            "                   as one angle (rot), near yaw +-90 deg (rot90) and its worst frame;\n"
+            "                   the angle columns compare each estimate with the nearer of the\n"
+            "                   truth's two angle triples (a, b, g) and (a+pi, pi-b, g+pi);\n"
+            "                   pitch: the same turn about cam1's x axis (beta stays near 0)\n"
+            "  --max-rot DEG    with --motion turn/pitch: exit status 1 if a method's largest\n"
+            "                   rotation error (rot_max) or a lost frame exceeds DEG / occurs\n"
+            "  --trace R|all    one line per frame of run R (or of every run) on stderr: the\n"
+            "                   turn's angle and the true beta (deg), per method its status,\n"
+            "                   geodesic rotation error (deg) and |tx| (m)\n"
             "  --threads N      worker threads (default: online CPUs)\n"
             "  --ekf-iterations N  Gauss-Newton iterations of the EKF update (default 3;\n"
             "                   1 = the plain EKF), for ablation\n"
@@ -410,6 +431,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
     o->seed = 1;
     o->focal_px = 800.0;
     o->noise_px = 0.5;
+    o->trace_run = -1;
     const long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
     o->threads = ncpu < 1 ? 1u : ncpu > MAX_THREADS ? MAX_THREADS : (unsigned)ncpu;
     if (parse_methods("stereo4,stereo2", o)) {
@@ -476,6 +498,21 @@ static int parse_args(int argc, char **argv, opts_t *o)
             o->runs_given = 1;
         } else if (strcmp(name, "--frames") == 0) {
             bad = parse_u32(val, 2, 1000000u, &o->frames);
+            o->frames_given = 1;
+        } else if (strcmp(name, "--max-rot") == 0) {
+            bad = parse_double(val, 1e-6, 180.0, &o->max_rot);
+            o->max_rot *= SIM_PI / 180.0;
+        } else if (strcmp(name, "--trace") == 0) {
+            uint32_t tr = 0;
+            bad = !(val && strcmp(val, "all") == 0) && parse_u32(val, 0, 100000000u, &tr);
+            o->trace_run = (val && strcmp(val, "all") == 0) ? -2 : (int64_t)tr;
+        } else if (strcmp(name, "--motion") == 0) {
+            bad = !val || (strcmp(val, "paper") != 0 && strcmp(val, "turn") != 0 &&
+                           strcmp(val, "pitch") != 0);
+            o->motion = !val                       ? RP_SIM_MOTION_PAPER
+                        : strcmp(val, "turn") == 0  ? RP_SIM_MOTION_TURN
+                        : strcmp(val, "pitch") == 0 ? RP_SIM_MOTION_PITCH
+                                                    : RP_SIM_MOTION_PAPER;
         } else if (strcmp(name, "--seed") == 0) {
             bad = parse_u64(val, &o->seed);
         } else if (strcmp(name, "--focal-px") == 0) {
@@ -496,6 +533,13 @@ static int parse_args(int argc, char **argv, opts_t *o)
             return -1;
         }
     }
+    if (o->max_rot > 0.0 && o->motion == RP_SIM_MOTION_PAPER) {
+        fprintf(stderr, "rigpose-sim: --max-rot needs --motion turn or pitch\n");
+        return -1;
+    }
+    if (o->motion != RP_SIM_MOTION_PAPER && !o->frames_given) {
+        o->frames = RP_SIM_TURN_FRAMES;
+    }
     if (o->layout_study) {
         if (!o->methods_given && parse_methods("gc,rc", o)) {
             return -1;
@@ -514,6 +558,10 @@ typedef struct {
     double err_sum[NCOL]; /* sum over frames 1..frames-1 of the absolute errors, m / rad */
     uint32_t lost;        /* scored frames whose step did not return RP_OK */
     uint64_t step_ns;     /* time spent in step(), all frames */
+    /* motion turn only: geodesic rotation error (rad), summed over all scored frames, over
+     * those within 10 degrees of yaw +-90 (and their count), and the largest */
+    double rot_sum, rot90_sum, rot_max;
+    uint32_t n90, lost90; /* frames near yaw +-90, and those of them lost */
 } run_result_t;
 
 typedef struct {
@@ -550,6 +598,28 @@ static void job_fail(job_t *job, const char *fmt, const char *a, const char *b)
         snprintf(job->why, sizeof job->why, fmt, a, b);
     }
     pthread_mutex_unlock(&job->lock);
+}
+
+/* R = Rz(g) Ry(b) Rx(a) (the paper's convention), double. */
+static void angles_to_R(const double abg[3], double R[9])
+{
+    const double ca = cos(abg[0]), sa = sin(abg[0]), cb = cos(abg[1]), sb = sin(abg[1]);
+    const double cg = cos(abg[2]), sg = sin(abg[2]);
+    R[0] = cg * cb;  R[1] = cg * sb * sa - sg * ca;  R[2] = cg * sb * ca + sg * sa;
+    R[3] = sg * cb;  R[4] = sg * sb * sa + cg * ca;  R[5] = sg * sb * ca - cg * sa;
+    R[6] = -sb;      R[7] = cb * sa;                 R[8] = cb * ca;
+}
+
+/* The angle of R_true^T R_est (rad, 0..pi). */
+static double geodesic(const double R_true[9], const rp_real p_est[6])
+{
+    double abg[3] = {(double)p_est[3], (double)p_est[4], (double)p_est[5]}, Re[9], tr = 0.0;
+    angles_to_R(abg, Re);
+    for (int i = 0; i < 9; ++i) {
+        tr += R_true[i] * Re[i]; /* trace(A^T B) = sum of the elementwise products */
+    }
+    const double c = 0.5 * (tr - 1.0);
+    return isfinite(c) ? acos(c > 1.0 ? 1.0 : c < -1.0 ? -1.0 : c) : SIM_PI;
 }
 
 static void *worker(void *arg)
@@ -594,6 +664,17 @@ static void *worker(void *arg)
         for (uint32_t j = 0; ok && j < o->frames; ++j) {
             (void)rp_sim_frame(&sr, j, fs); /* once, for every method */
             const double *truth = &sr.truth[6u * j];
+            const double *truth_R = &sr.truth_R[9u * j];
+            /* the turn's angle (yaw, or pitch), wrapped; near +-90 degrees: the crossings */
+            const double yaw = wrap_angle(rp_sim_turn_yaw(&sr, j * job->cfg.frame_dt));
+            const int near90 = o->motion != RP_SIM_MOTION_PAPER &&
+                               fabs(fabs(yaw) - 0.5 * SIM_PI) < 10.0 * SIM_PI / 180.0;
+            char trace[2048];
+            int trace_len = 0;
+            if ((int64_t)r == o->trace_run || o->trace_run == -2) {
+                trace_len = snprintf(trace, sizeof trace, "trace run %u frame %u yaw %.2f beta %.2f",
+                                     r, j, yaw * 180.0 / SIM_PI, truth[4] * 180.0 / SIM_PI);
+            }
             for (unsigned m = 0; m < o->n_methods; ++m) {
                 run_result_t *res = &job->res[(size_t)m * o->runs + r];
                 rp_estimate_t est;
@@ -607,9 +688,43 @@ static void *worker(void *arg)
                 for (int c = 0; c < 3; ++c) {
                     res->err_sum[c] += fabs((double)est.p[c] - truth[c]);
                 }
+                double ea[3], eb[3];
                 for (int c = 3; c < NCOL; ++c) {
-                    res->err_sum[c] += fabs(wrap_angle((double)est.p[c] - truth[c]));
+                    ea[c - 3] = fabs(wrap_angle((double)est.p[c] - truth[c]));
                 }
+                /* Through a turn the same rotation is also (a + pi, pi - b, g + pi): compare
+                 * with the nearer triple (the paper's motion keeps |b| far from pi / 2, where
+                 * the two meet, and is scored as before). */
+                eb[0] = fabs(wrap_angle((double)est.p[3] - truth[3] - SIM_PI));
+                eb[1] = fabs(wrap_angle((double)est.p[4] - (SIM_PI - truth[4])));
+                eb[2] = fabs(wrap_angle((double)est.p[5] - truth[5] - SIM_PI));
+                const int alt = o->motion != RP_SIM_MOTION_PAPER &&
+                                eb[0] + eb[1] + eb[2] < ea[0] + ea[1] + ea[2];
+                for (int c = 3; c < NCOL; ++c) {
+                    res->err_sum[c] += alt ? eb[c - 3] : ea[c - 3];
+                }
+                if ((int64_t)r == o->trace_run || o->trace_run == -2) {
+                    trace_len += snprintf(trace + trace_len, sizeof trace - trace_len,
+                                          " | %s %d %.3f %.5f", rp_pipe_layout_name(o->m[m]->layout),
+                                          (int)st, geodesic(truth_R, est.p) * 180.0 / SIM_PI,
+                                          fabs((double)est.p[0] - truth[0]));
+                    if (trace_len >= (int)sizeof trace) {
+                        trace_len = (int)sizeof trace - 1;
+                    }
+                }
+                if (o->motion != RP_SIM_MOTION_PAPER) {
+                    const double g = geodesic(truth_R, est.p);
+                    res->rot_sum += g;
+                    res->rot_max = fmax(res->rot_max, g);
+                    if (near90) {
+                        res->rot90_sum += g;
+                        res->n90 += 1;
+                        res->lost90 += st != RP_OK;
+                    }
+                }
+            }
+            if (trace_len > 0 && j > 0) {
+                fprintf(stderr, "%s\n", trace);
             }
         }
         rp_sim_run_free(&sr);
@@ -631,6 +746,9 @@ typedef struct {
     uint32_t worst_run_tx;   /* index of the run with the largest tx mean */
     uint64_t lost;
     double us_per_frame;     /* mean time of one step() call, microseconds */
+    double rot, rot90, rot_max; /* motion turn: geodesic rotation error, rad (run_result_t) */
+    uint32_t lost_runs;      /* runs with at least one lost frame */
+    uint64_t lost90, n90;    /* motion turn: frames near yaw +-90 lost, and all of them */
 } summary_t;
 
 static int cmp_double(const void *a, const void *b)
@@ -644,10 +762,21 @@ static void summarise(const opts_t *o, const run_result_t *res, double *scratch,
     const double per_run = (double)(o->frames - 1);
     uint64_t ns = 0;
     memset(s, 0, sizeof *s);
+    double rot = 0.0, rot90 = 0.0;
+    uint64_t n90 = 0;
     for (uint32_t r = 0; r < o->runs; ++r) {
         ns += res[r].step_ns;
         s->lost += res[r].lost;
+        s->lost_runs += res[r].lost > 0;
+        rot += res[r].rot_sum;
+        rot90 += res[r].rot90_sum;
+        n90 += res[r].n90;
+        s->lost90 += res[r].lost90;
+        s->rot_max = fmax(s->rot_max, res[r].rot_max);
     }
+    s->rot = rot / (per_run * o->runs);
+    s->rot90 = n90 ? rot90 / (double)n90 : 0.0;
+    s->n90 = n90;
     double worst_tx = -1.0;
     for (uint32_t r = 0; r < o->runs; ++r) {
         const double v = res[r].err_sum[0] / per_run;
@@ -686,8 +815,12 @@ static void json_num(const char *key, double v, int comma)
 static void print_json(const opts_t *o, const summary_t *s)
 {
     printf("{\"runs\": %u, \"frames\": %u, \"seed\": %llu, \"focal_px\": %.6g, "
-           "\"noise_px\": %.6g, \"rows\": [",
+           "\"noise_px\": %.6g, ",
            o->runs, o->frames, (unsigned long long)o->seed, o->focal_px, o->noise_px);
+    if (o->motion != RP_SIM_MOTION_PAPER) {
+        printf("\"motion\": \"%s\", ", o->motion == RP_SIM_MOTION_TURN ? "turn" : "pitch");
+    }
+    printf("\"rows\": [");
     for (unsigned m = 0; m < o->n_methods; ++m) {
         printf("%s{\"method\": \"%s\", ", m ? ", " : "", rp_pipe_layout_name(o->m[m]->layout));
         for (int c = 0; c < NCOL; ++c) {
@@ -695,6 +828,13 @@ static void print_json(const opts_t *o, const summary_t *s)
         }
         json_num("us_per_frame", s[m].us_per_frame, 1);
         printf("\"lost_frames\": %llu, ", (unsigned long long)s[m].lost);
+        if (o->motion != RP_SIM_MOTION_PAPER) {
+            json_num("rot", s[m].rot, 1);
+            json_num("rot90", s[m].rot90, 1);
+            json_num("rot_max", s[m].rot_max, 1);
+            printf("\"lost_runs\": %u, \"lost90\": %llu, \"frames90\": %llu, ", s[m].lost_runs,
+                   (unsigned long long)s[m].lost90, (unsigned long long)s[m].n90);
+        }
         json_num("worst_run_tx", s[m].worst_run[0], 1);
         json_num("median_run_tx", s[m].median_run[0], 1);
         printf("\"worst_run_index\": %u}", s[m].worst_run_tx);
@@ -721,6 +861,12 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
            o->runs, o->frames, (unsigned long long)o->seed, o->threads,
            o->threads == 1 ? "" : "s", cfg->width, cfg->height, o->focal_px, cfg->n_points,
            cfg->r_in, cfg->r_out, o->noise_px, o->frames - 1);
+    if (o->motion != RP_SIM_MOTION_PAPER) {
+        printf("  motion: a %s, %.3g rad/frame plus a smooth wobble (rp_sim.h); the "
+               "paper's row is for its own motion\n\n",
+               o->motion == RP_SIM_MOTION_TURN ? "turn (yaw)" : "pitch (the turn's control)",
+               cfg->turn_rate * cfg->frame_dt);
+    }
     if (o->ekf_iterations || o->no_refine) {
         printf("  ablation: EKF iterations %u, structure refinement %s\n\n",
                o->ekf_iterations ? o->ekf_iterations : 3u, o->no_refine ? "off" : "on");
@@ -751,7 +897,15 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
         print_cols("per-run mean, median", s[m].median_run, "%10.6f");
         printf("\n");
         print_cols("per-run mean, worst", s[m].worst_run, "%10.6f");
-        printf("  (worst tx: run %u)\n\n", s[m].worst_run_tx);
+        printf("  (worst tx: run %u)\n", s[m].worst_run_tx);
+        if (o->motion != RP_SIM_MOTION_PAPER) {
+            printf("  %-22s%10.6f%10.6f%10.6f  (rad; %u of %u runs lost frames; %llu of the "
+                   "%llu frames near yaw +-90 lost)\n",
+                   "rotation: all, yaw+-90, max", s[m].rot, s[m].rot90, s[m].rot_max,
+                   s[m].lost_runs, o->runs, (unsigned long long)s[m].lost90,
+                   (unsigned long long)s[m].n90);
+        }
+        printf("\n");
     }
 }
 
@@ -995,6 +1149,7 @@ int main(int argc, char **argv)
     cfg.focal_px = o.focal_px;
     cfg.noise_px = o.noise_px;
     cfg.n_frames = o.frames;
+    cfg.motion = o.motion;
     run_result_t *res = calloc((size_t)o.n_methods * o.runs, sizeof *res);
     double *scratch = malloc((size_t)o.runs * sizeof *scratch);
     summary_t *sum = calloc(o.n_methods, sizeof *sum);
@@ -1018,6 +1173,17 @@ int main(int argc, char **argv)
                 print_json(&o, sum);
             } else {
                 print_table(&o, &cfg, sum);
+            }
+            for (unsigned m = 0; o.max_rot > 0.0 && m < o.n_methods; ++m) {
+                if (!(sum[m].rot_max <= o.max_rot) || sum[m].lost > 0) {
+                    fprintf(stderr, "rigpose-sim: %s does not hold through the %s: largest "
+                            "rotation error %.3f deg (bound %.3f), %llu lost frames\n",
+                            rp_pipe_layout_name(o.m[m]->layout),
+                            o.motion == RP_SIM_MOTION_TURN ? "turn" : "pitch",
+                            sum[m].rot_max * 180.0 / SIM_PI, o.max_rot * 180.0 / SIM_PI,
+                            (unsigned long long)sum[m].lost);
+                    rc = 1;
+                }
             }
         }
     }

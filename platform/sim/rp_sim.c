@@ -22,7 +22,7 @@ _Static_assert(RP_MAX_CAMS >= RP_SIM_NCAMS, "the protocol's rig needs 6 cameras"
 #define SIM_PI 3.14159265358979323846
 
 /* Stream domains: keep the point cloud, the trajectory and the noise independent. */
-enum { DOM_POINTS = 1, DOM_TRAJ = 2, DOM_NOISE = 3 };
+enum { DOM_POINTS = 1, DOM_TRAJ = 2, DOM_NOISE = 3, DOM_TURN = 4 };
 
 /* ---- random numbers ------------------------------------------------------------------------ */
 
@@ -141,6 +141,11 @@ void rp_sim_default_cfg(rp_sim_cfg_t *cfg)
     cfg->n_frames = 100;
     cfg->cam2 = rp_sim_paper_place(1);
     cfg->cam4 = rp_sim_paper_place(0);
+    cfg->motion = RP_SIM_MOTION_PAPER;
+    cfg->turn_rate = 1.05;
+    cfg->turn_ramp_s = 1.0 / 3.0;
+    cfg->wobble_t = 0.03;
+    cfg->wobble_a = 0.05;
 }
 
 rp_vo_gc_cfg_t rp_sim_gc_cfg(const rp_sim_cfg_t *cfg)
@@ -255,6 +260,34 @@ int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, ui
         sr->points[3u * i + 2] = r * z;
     }
 
+    if (cfg->motion == RP_SIM_MOTION_TURN || cfg->motion == RP_SIM_MOTION_PITCH) {
+        /* The turn's parameters from their own stream (the paper's motion's stream unused). */
+        rp_rng_seed(&rng, sim_key(seed, run, DOM_TURN, 0));
+        sr->turn_sign = (rp_rng_next(&rng) >> 63) ? -1.0 : 1.0;
+        for (int q = 0; q < 6; ++q) {
+            for (int h = 0; h < 2; ++h) {
+                const double period = 1.0 + 2.0 * rp_rng_uniform(&rng); /* s */
+                sr->wob[q][h][0] = q < 3 ? cfg->wobble_t : cfg->wobble_a;
+                sr->wob[q][h][1] = 2.0 * SIM_PI / period;
+                sr->wob[q][h][2] = 2.0 * SIM_PI * rp_rng_uniform(&rng);
+            }
+        }
+        for (uint32_t j = 0; j < cfg->n_frames; ++j) {
+            double R[9], *t = &sr->truth[6u * j];
+            rp_sim_turn_pose(sr, (double)j * cfg->frame_dt, t, R);
+            memcpy(&sr->truth_R[9u * j], R, sizeof R);
+            rp_real Rr[9], abg[3];
+            for (int i = 0; i < 9; ++i) {
+                Rr[i] = (rp_real)R[i];
+            }
+            (void)rp_rot_to_angles(Rr, abg);
+            for (int i = 0; i < 3; ++i) {
+                t[3 + i] = (double)abg[i];
+            }
+        }
+        return 0;
+    }
+
     /* Trajectory: frame 0 is the identity; translation increments along the world axes,
      * rotation increments composed in the rig's frame, R_j = R_{j-1} Rz(dg) Ry(db) Rx(da). */
     rp_rng_seed(&rng, sim_key(seed, run, DOM_TRAJ, 0));
@@ -290,6 +323,48 @@ int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, ui
         }
     }
     return 0;
+}
+
+double rp_sim_turn_yaw(const rp_sim_run_t *sr, double t)
+{
+    const rp_sim_cfg_t *c = &sr->cfg;
+    if ((c->motion != RP_SIM_MOTION_TURN && c->motion != RP_SIM_MOTION_PITCH) || !(t > 0.0)) {
+        return 0.0;
+    }
+    const double tau = c->turn_ramp_s;
+    double psi;
+    if (tau > 0.0 && t < tau) {
+        /* rate w (3x^2 - 2x^3), x = t / tau: its integral w tau (x^3 - x^4 / 2) */
+        const double x = t / tau;
+        psi = c->turn_rate * tau * (x * x * x - 0.5 * x * x * x * x);
+    } else {
+        psi = c->turn_rate * (t - 0.5 * (tau > 0.0 ? tau : 0.0));
+    }
+    return sr->turn_sign * psi;
+}
+
+void rp_sim_turn_pose(const rp_sim_run_t *sr, double t, double d[3], double R[9])
+{
+    double w[6];
+    for (int q = 0; q < 6; ++q) {
+        w[q] = 0.0;
+        if (sr->cfg.motion == RP_SIM_MOTION_TURN || sr->cfg.motion == RP_SIM_MOTION_PITCH) {
+            for (int h = 0; h < 2; ++h) {
+                const double *p = sr->wob[q][h];
+                w[q] += p[0] * (sin(p[1] * t + p[2]) - sin(p[2]));
+            }
+        }
+    }
+    const double psi = rp_sim_turn_yaw(sr, t);
+    const double c = cos(psi), s = sin(psi);
+    const double Ry[9] = {c, 0, s, 0, 1, 0, -s, 0, c};
+    const double Rx[9] = {1, 0, 0, 0, c, -s, 0, s, c};
+    double Rw[9];
+    rot_from_angles(w[3], w[4], w[5], Rw);
+    mat_mul(sr->cfg.motion == RP_SIM_MOTION_PITCH ? Rx : Ry, Rw, R);
+    d[0] = w[0];
+    d[1] = w[1];
+    d[2] = w[2];
 }
 
 void rp_sim_run_free(rp_sim_run_t *sr)

@@ -15,6 +15,8 @@
  * frame: R_j = R_{j-1} Rz(dg) Ry(db) Rx(da). A point is visible to a camera when it is at
  * least min_depth in front and projects inside the image. Pixel noise: Gaussian, noise_px.
  * Everything is a function of (seed, run index): runs can be computed in any order.
+ * cfg.motion = RP_SIM_MOTION_TURN replaces that random walk with a turn (rp_sim_turn_pose): a
+ * smooth function of time, sampled at j * frame_dt, in the same scene and with the same noise.
  * cam2's and cam4's placements (position and yaw) are configurable (cfg.cam2, cfg.cam4) for
  * the layout study (rp_sim_layout.h); the defaults are the paper's, above.
  */
@@ -41,6 +43,29 @@ typedef struct {
     double yaw;            /* rad */
 } rp_sim_place_t;
 
+/* The rig's trajectory. */
+typedef enum {
+    RP_SIM_MOTION_PAPER = 0, /* the paper's random per-frame increments (above) */
+    /* A turn on the spot: yaw (about the world's y axis, cam1's y at frame 0: down) psi(t) =
+     * s turn_rate (t - turn_ramp_s / 2) after a smooth start (the rate rises from 0 to
+     * turn_rate over turn_ramp_s, a cubic smoothstep), s = +-1 per run (+: turning right), and
+     * on top a smooth wobble in all six degrees of freedom: per translation axis (world) and per
+     * angle (rig frame) the sum of two sinusoids of amplitude wobble_t (m) / wobble_a (rad),
+     * periods U[1, 3] s and random phases, minus their value at t = 0, so that the pose at t = 0
+     * is the identity. R(t) = Ry(psi) Rz(g_w) Ry(b_w) Rx(a_w), d(t) = the translation wobble:
+     * |d| <= 4 wobble_t per axis, so the rig stays well inside the shell. With the defaults
+     * (1.05 rad/s = 0.035 rad per frame at 30 Hz: about the paper's largest per-frame rotation
+     * |(0.02, 0.02, 0.02)| = 0.035 rad, and the KITTI clip's 98 degrees in 51 frames at 10 Hz)
+     * the yaw passes 90 degrees at frame 50, 180 at frame 95, 270 (= -90) at frame 140 and 360
+     * at frame 185, give or take the wobble; the per-frame steps reach about 11 mm per axis and
+     * (turn and wobble together) 0.047 rad (test_turns.c), in the paper's ranges. */
+    RP_SIM_MOTION_TURN = 1,
+    /* The same turn about the world's x axis (cam1's x at frame 0: right), R(t) = Rx(psi) Rw:
+     * a pitch through the same angles at the same rates, where the paper's angles are not
+     * singular (beta stays near 0): the control for what the turn's beta = +-90 costs. */
+    RP_SIM_MOTION_PITCH = 2,
+} rp_sim_motion_t;
+
 typedef struct {
     uint32_t n_points;     /* 10000 */
     double r_in, r_out;    /* 0.667, 1.0 m */
@@ -54,7 +79,16 @@ typedef struct {
     uint32_t n_frames;     /* 100 */
     rp_sim_place_t cam2;   /* (+0.0866, 0, -0.05), yaw +pi/2 (the paper's) */
     rp_sim_place_t cam4;   /* (-0.0866, 0, -0.05), yaw -pi/2 (the paper's) */
+    rp_sim_motion_t motion;/* RP_SIM_MOTION_PAPER */
+    double turn_rate;      /* rad/s, 1.05 (turn only) */
+    double turn_ramp_s;    /* s, 1/3 (turn only) */
+    double wobble_t;       /* m, 0.03 (turn only) */
+    double wobble_a;       /* rad, 0.05 (turn only) */
 } rp_sim_cfg_t;
+
+/* The number of frames a turn run takes by default in the tools: 200 (one full turn at the
+ * default rate, with 15 frames to spare). */
+#define RP_SIM_TURN_FRAMES 200u
 
 void rp_sim_default_cfg(rp_sim_cfg_t *cfg);
 
@@ -78,12 +112,27 @@ typedef struct {
     double *truth;    /* n_frames x 6: [tx ty tz alpha beta gamma] of cam1 per frame */
     double *truth_R;  /* n_frames x 9: R_j (exact, accumulated; angles are extracted from it) */
     rp_rig_t rig;
+    /* The turn's random parameters (motion turn only): the direction, and per degree of
+     * freedom (tx ty tz alpha beta gamma) two sinusoids' amplitude, angular rate (rad/s) and
+     * phase. */
+    double turn_sign;
+    double wob[6][2][3];
 } rp_sim_run_t;
 
 /* Make run `run` of the experiment seeded by `seed`: the point cloud and the trajectory.
  * Returns 0, or -1 if memory ran out. */
 int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, uint32_t run);
 void rp_sim_run_free(rp_sim_run_t *sr);
+
+/* The turn's pose at time t (s, any real t >= 0, not only frame times) of a run made with
+ * motion turn (or pitch): cam1's position d (world, m) and orientation R (row-major, cam1 to world).
+ * Frame j's truth is this at t = j * frame_dt. For runs of the paper's motion it gives the
+ * identity. */
+void rp_sim_turn_pose(const rp_sim_run_t *sr, double t, double d[3], double R[9]);
+
+/* The turn's angle psi(t) alone (rad, unwrapped; without the wobble's part); 0 for the
+ * paper's motion. */
+double rp_sim_turn_yaw(const rp_sim_run_t *sr, double t);
 
 /* The noisy features of frame j in all six cameras (ids = point index; the same point carries
  * the same id in every camera that sees it). The noise is a function of (seed, run, j) only.

@@ -120,13 +120,25 @@ double wrap_angle(double x)
     return x - M_PI;
 }
 
+/* With --motion turn / pitch the angles are compared as rigpose-sim does then: with the nearer
+ * of the truth's two triples (a, b, g) and (a + pi, pi - b, g + pi), the same rotation. */
+bool g_equiv_angles = false;
+
 void add_err(const rp_real p[6], const double *truth, double acc[NCOL])
 {
     for (int c = 0; c < 3; ++c) {
         acc[c] += std::fabs((double)p[c] - truth[c]);
     }
+    double ea[3], eb[3];
     for (int c = 3; c < NCOL; ++c) {
-        acc[c] += std::fabs(wrap_angle((double)p[c] - truth[c]));
+        ea[c - 3] = std::fabs(wrap_angle((double)p[c] - truth[c]));
+    }
+    eb[0] = std::fabs(wrap_angle((double)p[3] - truth[3] - M_PI));
+    eb[1] = std::fabs(wrap_angle((double)p[4] - (M_PI - truth[4])));
+    eb[2] = std::fabs(wrap_angle((double)p[5] - truth[5] - M_PI));
+    const bool alt = g_equiv_angles && eb[0] + eb[1] + eb[2] < ea[0] + ea[1] + ea[2];
+    for (int c = 3; c < NCOL; ++c) {
+        acc[c] += alt ? eb[c - 3] : ea[c - 3];
     }
 }
 
@@ -191,10 +203,11 @@ bool run_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rp_rig_t &rig, uin
 }
 
 bool sim_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rp_rig_t &rig, uint64_t seed,
-                   uint32_t run, uint32_t frames, Method *m)
+                   uint32_t run, uint32_t frames, int motion, Method *m)
 {
     rp_sim_cfg_t sc;
     rp_sim_default_cfg(&sc);
+    sc.motion = (rp_sim_motion_t)motion; /* the rendered run's motion (rp_render_cli.hpp) */
     sc.width = rig.cam[0].cam.width;
     sc.height = rig.cam[0].cam.height;
     sc.focal_px = (double)rig.cam[0].cam.fx;
@@ -387,6 +400,7 @@ int main(int argc, char **argv)
     if (checks && !parse_checks(checks, &methods)) {
         return 2;
     }
+    g_equiv_angles = sc.motion != 0;
     if (sc.frames < 2) {
         std::fprintf(stderr, "rigpose-e2e: --frames must be >= 2 (frame 0 is not scored)\n");
         return 2;
@@ -501,7 +515,8 @@ int main(int argc, char **argv)
             double sim_tx = -1.0;
             if (sim_ref) {
                 const double before = methods[m].err_sim[0];
-                if (!sim_reference(ref, cfgs[m], seq.rig(), rc.seed, r, rc.frames, &methods[m])) {
+                if (!sim_reference(ref, cfgs[m], seq.rig(), rc.seed, r, rc.frames, rc.motion,
+                                   &methods[m])) {
                     std::fprintf(stderr, "rigpose-e2e: feature-level reference failed\n");
                     return 1;
                 }
