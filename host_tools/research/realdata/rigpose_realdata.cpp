@@ -375,12 +375,27 @@ void usage(FILE *f)
     std::fprintf(
         f,
         "usage: rigpose-realdata (--kitti DIR | --euroc DIR) [options]\n"
-        "  --kitti DIR          KITTI odometry folder (calib.txt, times.txt, poses.txt,\n"
-        "                       left/ + right/ or image_0/ + image_1/)\n"
-        "  --euroc DIR          EuRoC MAV folder (cam0/, cam1/ with data.csv and sensor.yaml,\n"
-        "                       groundtruth.txt in TUM format)\n"
+        "  --kitti DIR          KITTI odometry folder: calib.txt (P0 left, P1 right: lines\n"
+        "                       \"P0: <12 numbers>\", \"P1: ...\" or P_rect_00 / P_rect_01, or\n"
+        "                       without labels the first two lines of 12 numbers, 3x4 row-\n"
+        "                       major), poses.txt (per frame 12 numbers: 3x4 [R|t] row-major,\n"
+        "                       the left camera at frame j in frame 0's), times.txt (s per\n"
+        "                       frame; or --fps), images NNNNNN.png in image_0/ + image_1/,\n"
+        "                       image_l/ + image_r/ or left/ + right/ (first found; --images)\n"
+        "  --euroc DIR          EuRoC MAV folder (or its mav0/): cam0/ (left), cam1/ (right)\n"
+        "                       with sensor.yaml and data.csv (t[ns],file; every listed image\n"
+        "                       must exist); the body's ground truth: groundtruth.txt, TUM\n"
+        "                       \"t[s] tx ty tz qx qy qz qw\" (qw LAST), else EuRoC's own\n"
+        "                       state_groundtruth_estimate0/data.csv \"t[ns], px, py, pz, qw,\n"
+        "                       qx, qy, qz, ...\" (qw FIRST); told apart by the time column\n"
+        "                       (over 1e12: ns). The first pose read is printed: check it\n"
+        "  --truth FILE         the ground-truth file (KITTI poses / TUM / EuRoC csv format)\n"
+        "  --images L,R         KITTI: the left and right image folders under DIR\n"
+        "  --fps HZ             KITTI: frame j at j / HZ s (times.txt not read; for folders\n"
+        "                       without it)\n"
         "  --frames N           N frames (default: all)\n"
-        "  --first K            start at frame K (its left camera is the world; default 0)\n"
+        "  --first K            start at frame K (frames, not file lines: EuRoC counts the\n"
+        "                       timestamps both cameras list; its left camera is the world)\n"
         "  --name NAME          prefix of the JSON figures (default kitti00 / euroc_mh01)\n"
         "  --quiet              no per-frame lines\n"
         "  --json-out FILE      write the figures as one flat JSON object\n"
@@ -413,6 +428,7 @@ int main(int argc, char **argv)
 {
     std::string kitti, euroc, name, json_out, replay_out;
     size_t frames = 0, first = 0;
+    rprd::LoadOpts lo;
     bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
     bool direct_ref = false, steps = false;
     size_t splice = 0;
@@ -450,6 +466,23 @@ int main(int argc, char **argv)
             frames = (size_t)std::strtoul(argv[++i], nullptr, 10);
         } else if (a == "--first") {
             first = (size_t)std::strtoul(argv[++i], nullptr, 10);
+        } else if (a == "--images") {
+            const std::string v = argv[++i];
+            const size_t comma = v.find(',');
+            if (comma == std::string::npos || comma == 0 || comma + 1 >= v.size()) {
+                std::fprintf(stderr, "rigpose-realdata: --images LEFT,RIGHT (folder names)\n");
+                return 2;
+            }
+            lo.left = v.substr(0, comma);
+            lo.right = v.substr(comma + 1);
+        } else if (a == "--fps") {
+            lo.fps = std::atof(argv[++i]);
+            if (!(lo.fps > 0.0 && lo.fps < 1e4)) {
+                std::fprintf(stderr, "rigpose-realdata: --fps HZ: a frame rate > 0\n");
+                return 2;
+            }
+        } else if (a == "--truth") {
+            lo.truth = argv[++i];
         } else if (a == "--name") {
             name = argv[++i];
         } else if (a == "--json-out") {
@@ -483,10 +516,15 @@ int main(int argc, char **argv)
     rprd::Sequence seq;
     std::string err;
     const bool is_kitti = !kitti.empty();
-    if (!(is_kitti ? rprd::load_kitti(kitti, first, frames, &seq, &err)
-                   : rprd::load_euroc(euroc, first, frames, &seq, &err))) {
+    lo.first = first;
+    lo.max_frames = frames;
+    if (!(is_kitti ? rprd::load_kitti(kitti, lo, &seq, &err)
+                   : rprd::load_euroc(euroc, lo, &seq, &err))) {
         std::fprintf(stderr, "rigpose-realdata: %s\n", err.c_str());
         return 2;
+    }
+    for (const std::string &n : seq.notes) {
+        std::printf("read %s\n", n.c_str());
     }
     seq.name = !name.empty() ? name : (is_kitti ? "kitti00" : "euroc_mh01");
     Profile pr = is_kitti ? kitti_profile() : euroc_profile();
