@@ -11,7 +11,10 @@
 #                                  of each); also
 #                                  kitti00_from14_* (frames 14-99: past the ground truth's
 #                                  extrapolated start, README.md) and the two yardsticks
-#                                  (OpenCV stereo PnP; dense direct odometry, rp_direct.hpp)
+#                                  (OpenCV stereo PnP; dense direct odometry, rp_direct.hpp),
+#                                  and each clip's mirror image (*_mirror_*, --mirror)
+#   mirror_ate.sh                  not in make test: each clip's ATE against its mirror
+#                                  image's, within 10 % (not met today: README.md)
 #
 # The images are larger than the default build's tracker limit (640x480: KITTI is 1241x376,
 # EuRoC 752x480), so the program links its own release build of the core with
@@ -36,8 +39,9 @@ $(RD_CONFIG_O): platform/src/rp_config.c platform/include/rigpose/rp_config.h $(
 	@mkdir -p $(@D)
 	$(CC) $(CSTD) $(CORE_WARN) -Wno-format-truncation -D_DEFAULT_SOURCE -Iplatform/include $(INC) \
 	    -O2 -g -DNDEBUG $(RD_DEFS) -c $< -o $@
-RD_SRC := host_tools/research/realdata/rigpose_realdata.cpp host_tools/research/realdata/rp_realdata.cpp \
-    host_tools/research/realdata/rp_direct.cpp
+RD_LIB_SRC := host_tools/research/realdata/rp_realdata.cpp host_tools/research/realdata/rp_direct.cpp \
+    host_tools/research/realdata/rp_mirror.cpp
+RD_SRC := host_tools/research/realdata/rigpose_realdata.cpp $(RD_LIB_SRC)
 RD_HDR_CORE := $(wildcard core/include/rigpose/*.h platform/include/rigpose/*.h)
 RD_HDR := $(wildcard host_tools/research/realdata/*.hpp) $(RD_HDR_CORE)
 
@@ -52,10 +56,9 @@ RD_DATA = $(or $(RIGPOSE_DATA),$(abspath $(CURDIR)/../shared/data))
 
 # Conversions, scoring and loaders (host_tools/research/realdata/test_realdata_conv.cpp).
 RD_TEST := $(RD_DIR)/test_realdata_conv
-$(RD_TEST): host_tools/research/realdata/test_realdata_conv.cpp host_tools/research/realdata/rp_realdata.cpp \
-            host_tools/research/realdata/rp_direct.cpp $(RD_HDR) $(RD_DIR)/librigpose_core.a | deps
-	$(CXX) $(RD_CXXFLAGS) $< host_tools/research/realdata/rp_realdata.cpp host_tools/research/realdata/rp_direct.cpp \
-	    $(RD_DIR)/librigpose_core.a -o $@ $(RD_LIBS)
+$(RD_TEST): host_tools/research/realdata/test_realdata_conv.cpp $(RD_LIB_SRC) $(RD_HDR) \
+            $(RD_DIR)/librigpose_core.a | deps
+	$(CXX) $(RD_CXXFLAGS) $< $(RD_LIB_SRC) $(RD_DIR)/librigpose_core.a -o $@ $(RD_LIBS)
 
 HOST_EXTRA_TESTS += $(RD_TEST) host_tools/research/realdata/test_realdata.sh
 test: $(RD_BIN) $(RD_TEST)
@@ -74,11 +77,19 @@ $(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
 	      --opencv-ref --direct-ref --name kitti00_from14 --json-out $(RD_DIR)/kitti00_from14.json && \
 	  $(RD_BIN) --euroc $(RD_DATA)/euroc_mh01_000-149 --frames $(RD_BENCH_EUROC) --quiet \
 	      --json-out $(RD_DIR)/euroc_mh01.json && \
-	  echo '{}' > $(RD_DIR)/kitti_raw0005.json && \
+	  $(RD_BIN) --kitti $(RD_DATA)/kitti00_000-099 --frames $(RD_BENCH_KITTI) --quiet --mirror \
+	      --json-out $(RD_DIR)/kitti00_mirror.json && \
+	  $(RD_BIN) --euroc $(RD_DATA)/euroc_mh01_000-149 --frames $(RD_BENCH_EUROC) --quiet --mirror \
+	      --json-out $(RD_DIR)/euroc_mh01_mirror.json && \
+	  echo '{}' > $(RD_DIR)/kitti_raw0005.json && echo '{}' > $(RD_DIR)/kitti_raw0005_mirror.json && \
 	  { [ ! -d "$(RD_DATA)/kitti_raw_0926_0005_000-090" ] || \
-	    $(RD_BIN) --kitti $(RD_DATA)/kitti_raw_0926_0005_000-090 --frames $(RD_BENCH_KITTI) --quiet \
-	      --opencv-ref --direct-ref --name kitti_raw0005 --json-out $(RD_DIR)/kitti_raw0005.json; } && \
+	    { $(RD_BIN) --kitti $(RD_DATA)/kitti_raw_0926_0005_000-090 --frames $(RD_BENCH_KITTI) --quiet \
+	        --opencv-ref --direct-ref --name kitti_raw0005 --json-out $(RD_DIR)/kitti_raw0005.json && \
+	      $(RD_BIN) --kitti $(RD_DATA)/kitti_raw_0926_0005_000-090 --frames $(RD_BENCH_KITTI) --quiet \
+	        --mirror --name kitti_raw0005_mirror --json-out $(RD_DIR)/kitti_raw0005_mirror.json; }; } && \
 	  $(PY) host_tools/research/bench/merge_json.py $@ $(RD_DIR)/kitti00.json \
-	      $(RD_DIR)/kitti00_from14.json $(RD_DIR)/euroc_mh01.json $(RD_DIR)/kitti_raw0005.json; \
+	      $(RD_DIR)/kitti00_from14.json $(RD_DIR)/euroc_mh01.json $(RD_DIR)/kitti00_mirror.json \
+	      $(RD_DIR)/euroc_mh01_mirror.json $(RD_DIR)/kitti_raw0005.json \
+	      $(RD_DIR)/kitti_raw0005_mirror.json; \
 	else echo "realdata: no data in $(RD_DATA) (set RIGPOSE_DATA): figures left out"; \
 	  echo '{}' > $@; fi

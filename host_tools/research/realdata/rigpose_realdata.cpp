@@ -37,6 +37,7 @@
 #include "rigpose/rp_config.h"
 #include "rigpose/rp_pipe.h"
 #include "rp_direct.hpp"
+#include "rp_mirror.hpp"
 #include "rp_realdata.hpp"
 #include "../../common/rp_cfg_diff.h"
 #include "../../common/rp_cv.hpp"
@@ -441,6 +442,11 @@ void usage(FILE *f)
         "  --direct-ref         also run dense direct stereo odometry (rp_direct.hpp:\n"
         "                       SGBM depth + photometric alignment, no features; rectified\n"
         "                       pairs only, about 1 s per frame) as a second yardstick\n"
+        "  --mirror             run on the clip's mirror image instead (cameras swapped, images\n"
+        "                       flipped left-right, calibration and truth mirrored: rp_mirror.hpp),\n"
+        "                       written to a temporary folder removed at exit\n"
+        "  --mirror-out DIR     the same, the mirror image written to DIR (kept; the same format\n"
+        "                       as the input; with --no-run only written)\n"
         "  --steps              print each frame-to-frame step (length, rotation, direction)\n"
         "                       of the truth, rigpose and the yardsticks run\n"
         "  --direct-rows A,B    the direct yardstick uses image rows A..B-1 only (e.g. the\n"
@@ -464,7 +470,8 @@ void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
-    std::string kitti, euroc, name, json_out, replay_out, config;
+    std::string kitti, euroc, name, json_out, replay_out, config, mirror_out;
+    bool mirror = false;
     size_t frames = 0, first = 0;
     rprd::LoadOpts lo;
     bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
@@ -489,6 +496,8 @@ int main(int argc, char **argv)
             opencv_ref = true;
         } else if (a == "--direct-ref") {
             direct_ref = true;
+        } else if (a == "--mirror") {
+            mirror = true;
         } else if (a == "--steps") {
             steps = true;
         } else if (!has_val) {
@@ -519,6 +528,9 @@ int main(int argc, char **argv)
                 std::fprintf(stderr, "rigpose-realdata: --fps HZ: a frame rate > 0\n");
                 return 2;
             }
+        } else if (a == "--mirror-out") {
+            mirror_out = argv[++i];
+            mirror = true;
         } else if (a == "--config") {
             config = argv[++i];
         } else if (a == "--truth") {
@@ -566,7 +578,45 @@ int main(int argc, char **argv)
     for (const std::string &n : seq.notes) {
         std::printf("read %s\n", n.c_str());
     }
-    seq.name = !name.empty() ? name : (is_kitti ? "kitti00" : "euroc_mh01");
+    /* --mirror: write the clip's mirror image (rp_mirror.hpp) and run on that instead */
+    struct TmpDir {
+        std::string path;
+        ~TmpDir()
+        {
+            std::error_code ec;
+            if (!path.empty()) {
+                fs::remove_all(path, ec);
+            }
+        }
+    } tmp;
+    if (mirror) {
+        std::string out = mirror_out;
+        if (out.empty()) {
+            const char *td = std::getenv("TMPDIR");
+            std::string tmpl = std::string(td && *td ? td : "/tmp") + "/rigpose_mirror_XXXXXX";
+            if (!mkdtemp(&tmpl[0])) {
+                std::fprintf(stderr, "rigpose-realdata: %s: cannot make a temporary folder\n",
+                             tmpl.c_str());
+                return 1;
+            }
+            out = tmp.path = tmpl;
+        }
+        rprd::Sequence m;
+        if (!rprd::write_sequence(rprd::mirror_sequence(seq), out, true, &err) ||
+            !(is_kitti ? rprd::load_kitti(out, 0, 0, &m, &err)
+                       : rprd::load_euroc(out, 0, 0, &m, &err))) {
+            std::fprintf(stderr, "rigpose-realdata: mirror image: %s\n", err.c_str());
+            return 1;
+        }
+        std::printf("mirror image of frames %zu..%zu of %s (cameras swapped, images flipped, "
+                    "calibration and truth mirrored) in %s%s\n",
+                    first, first + seq.utime.size() - 1, seq.dir.c_str(), out.c_str(),
+                    tmp.path.empty() ? "" : " (removed at exit)");
+        seq = m;
+        first = 0;
+    }
+    seq.name = !name.empty() ? name
+                             : std::string(is_kitti ? "kitti00" : "euroc_mh01") + (mirror ? "_mirror" : "");
     static rp_pipe_cfg_t cfg;
     if (!base_cfg(config, &cfg, &err)) {
         std::fprintf(stderr, "rigpose-realdata: %s\n", err.c_str());

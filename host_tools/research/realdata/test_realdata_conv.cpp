@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <filesystem>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -19,6 +20,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "rp_direct.hpp"
+#include "rp_mirror.hpp"
 #include "rp_realdata.hpp"
 
 namespace {
@@ -246,6 +248,8 @@ bool has(const std::string &text, const std::string &part)
     return text.find(part) != std::string::npos;
 }
 
+void check_mirror(const char *what, const rprd::Sequence &s);
+
 void check_loaders_synthetic()
 {
     char tmpl[] = "/tmp/rp_realdata_test_XXXXXX";
@@ -344,9 +348,180 @@ void check_loaders_synthetic()
     const bool ok_w = rprd::load_euroc(et, 0, 0, &a, &err);
     check(ok_w && has(a.notes[1], "qw 0.000000 qx 1.000000"),
           ("EuRoC: a TUM file with qw first shows qx 1 in its first pose: " + a.notes[1]).c_str(), 0.0);
+    /* the mirror image of a synthetic KITTI and EuRoC folder (EuRoC: distortion, a rotated pair) */
+    make_kitti("k_mirror", true, "image_0", "image_1", true, 4);
+    if (rprd::load_kitti(g_tmp + "/k_mirror", 0, 0, &a, &err)) {
+        check_mirror("mirror: synthetic KITTI", a);
+    }
+    const std::string er = make_euroc("e_mirror", 4, -1, -1, true);
+    put(er + "/cam1/sensor.yaml",
+        "T_BS:\n  data: [0.999997256478, -0.00231713572328, -0.000343393120572, 0.1100741378,\n"
+        "    0.00231206719243, 0.999898048507, -0.0140906684527, -0.000156612054393,\n"
+        "    0.000376008102368, 0.0140898358467, 0.999900662638, 0.000889382785436, 0, 0, 0, 1]\n"
+        "resolution: [64, 48]\nintrinsics: [48, 47, 33.2, 22.1]\n"
+        "distortion_model: radial-tangential\ndistortion_coefficients: [-0.2837, 0.0745, -0.0001, -0.00003]\n");
+    if (rprd::load_euroc(er, 0, 0, &a, &err)) {
+        check_mirror("mirror: synthetic EuRoC", a);
+    } else {
+        check(false, ("mirror: synthetic EuRoC: " + err).c_str(), 0.0);
+    }
     const std::string cmd = "rm -rf '" + g_tmp + "'";
     if (std::system(cmd.c_str()) != 0) {
         std::printf("note: could not remove %s\n", g_tmp.c_str());
+    }
+}
+
+/* ---- the mirror image (rp_mirror.hpp, issue 14 item 8) ------------------------------------ */
+
+double rig_diff(const rp_rig_t &a, const rp_rig_t &b)
+{
+    double d = 0.0;
+    for (int k = 0; k < 2; ++k) {
+        const rp_rig_cam_t &x = a.cam[k], &y = b.cam[k];
+        for (int i = 0; i < 9; ++i) {
+            d = std::fmax(d, std::fabs((double)(x.R[i] - y.R[i])));
+        }
+        for (int i = 0; i < 3; ++i) {
+            d = std::fmax(d, std::fabs((double)(x.D[i] - y.D[i])));
+        }
+        const rp_real p[] = {x.cam.fx - y.cam.fx, x.cam.fy - y.cam.fy, x.cam.cx - y.cam.cx,
+                             x.cam.cy - y.cam.cy, x.cam.k1 - y.cam.k1, x.cam.k2 - y.cam.k2,
+                             x.cam.p1 - y.cam.p1, x.cam.p2 - y.cam.p2, x.cam.k3 - y.cam.k3};
+        for (rp_real v : p) {
+            d = std::fmax(d, std::fabs((double)v));
+        }
+        if (x.cam.width != y.cam.width || x.cam.height != y.cam.height) {
+            d = 1e9;
+        }
+    }
+    return d;
+}
+
+double truth_diff(const rprd::Sequence &a, const rprd::Sequence &b)
+{
+    if (a.truth.size() != b.truth.size()) {
+        return 1e9;
+    }
+    double d = 0.0;
+    for (size_t j = 0; j < a.truth.size(); ++j) {
+        d = std::fmax(d, pose_diff(a.truth[j], b.truth[j]));
+    }
+    return d;
+}
+
+rprd::Pose cam_pose(const rp_rig_cam_t &c)
+{
+    rprd::Pose T;
+    for (int i = 0; i < 9; ++i) {
+        T.R[i] = (double)c.R[i];
+    }
+    for (int i = 0; i < 3; ++i) {
+        T.t[i] = (double)c.D[i];
+    }
+    return T;
+}
+
+/* Scene points seen by both sequences: the original's camera k at frame j sees X (world) at
+ * pixel u; the mirror image's camera 1-k at frame j sees the mirrored point (X in the
+ * mirrored world: M E^-1 X) at (w - 1 - u_x, u_y). Largest pixel difference over the frames,
+ * both cameras and 200 seeded points in front of the cameras. */
+double mirror_pixel_error(const rprd::Sequence &s, const rprd::Sequence &m)
+{
+    const rprd::Pose E = cam_pose(s.rig.cam[1]);
+    const rprd::Pose Ei = rprd::pose_inv(E);
+    std::srand(11);
+    double worst = 0.0;
+    int seen = 0;
+    for (size_t j = 0; j < s.truth.size(); ++j) {
+        for (int n = 0; n < 200; ++n) {
+            /* a point 2..20 m in front of the left camera at frame j, in the world */
+            const double z = 2.0 + 18.0 * std::rand() / RAND_MAX;
+            const double pc[3] = {z * (0.8 * std::rand() / RAND_MAX - 0.4),
+                                  z * (0.6 * std::rand() / RAND_MAX - 0.3), z};
+            rprd::Pose P; /* the point as a translation */
+            for (int i = 0; i < 3; ++i) {
+                P.t[i] = pc[i];
+            }
+            const rprd::Pose Xw = rprd::pose_mul(s.truth[j], P);
+            const rprd::Pose Xm = rprd::mirror_pose(rprd::pose_mul(Ei, Xw)); /* mirrored world */
+            for (int k = 0; k < 2; ++k) {
+                const rprd::Pose in_s =
+                    rprd::pose_mul(rprd::pose_inv(rprd::pose_mul(s.truth[j], cam_pose(s.rig.cam[k]))), Xw);
+                const rprd::Pose in_m = rprd::pose_mul(
+                    rprd::pose_inv(rprd::pose_mul(m.truth[j], cam_pose(m.rig.cam[1 - k]))), Xm);
+                rp_real a[3], b[3], ua[2], ub[2];
+                for (int i = 0; i < 3; ++i) {
+                    a[i] = (rp_real)in_s.t[i];
+                    b[i] = (rp_real)in_m.t[i];
+                }
+                if (rp_cam_project(&s.rig.cam[k].cam, a, ua, nullptr) != RP_OK ||
+                    rp_cam_project(&m.rig.cam[1 - k].cam, b, ub, nullptr) != RP_OK) {
+                    continue;
+                }
+                const double w1 = (double)s.rig.cam[k].cam.width - 1.0;
+                worst = std::fmax(worst, std::fabs(w1 - (double)ua[0] - (double)ub[0]));
+                worst = std::fmax(worst, std::fabs((double)ua[1] - (double)ub[1]));
+                ++seen;
+            }
+        }
+    }
+    return seen > 0 ? worst : 1e9;
+}
+
+/* The first row of pixels of a written image is the source image's row reversed. */
+bool flipped_copy(const std::string &src, const std::string &dst)
+{
+    const cv::Mat a = cv::imread(src, cv::IMREAD_GRAYSCALE), b = cv::imread(dst, cv::IMREAD_GRAYSCALE);
+    if (a.empty() || b.empty() || a.size() != b.size()) {
+        return false;
+    }
+    cv::Mat f;
+    cv::flip(a, f, 1);
+    return cv::norm(f, b, cv::NORM_INF) == 0.0;
+}
+
+/* Mirror twice = the sequence; pixels of the mirror image = the flipped pixels; written and
+ * read back = the mirror image. */
+void check_mirror(const char *what, const rprd::Sequence &s)
+{
+    const rprd::Sequence m = rprd::mirror_sequence(s);
+    const rprd::Sequence mm = rprd::mirror_sequence(m);
+    const double d2 = std::fmax(rig_diff(s.rig, mm.rig), truth_diff(s, mm));
+    check(d2 < 1e-12 && mm.img[0] == s.img[0] && mm.img[1] == s.img[1],
+          (std::string(what) + ": mirror twice = the sequence (rig, truth, images)").c_str(), d2);
+    check(rp_rig_check(&m.rig) == RP_OK && pose_diff(m.truth[0], rprd::Pose()) < 1e-12,
+          (std::string(what) + ": mirror image: a usable rig, frame 0 the world").c_str(), 0.0);
+    const double px = mirror_pixel_error(s, m);
+    check(px < 1e-6, (std::string(what) + ": a scene point's pixel in the mirror image is the "
+                                          "original's flipped (w - 1 - u), both cameras").c_str(), px);
+    /* the brief's guess, p1 flipped instead of p2, would not be: show it on a distorted rig */
+    if (s.rig.cam[0].cam.p1 != 0 || s.rig.cam[0].cam.p2 != 0) {
+        rprd::Sequence wrong = m;
+        for (int k = 0; k < 2; ++k) {
+            wrong.rig.cam[k].cam.p1 = -wrong.rig.cam[k].cam.p1;
+            wrong.rig.cam[k].cam.p2 = -wrong.rig.cam[k].cam.p2;
+        }
+        const double pw = mirror_pixel_error(s, wrong);
+        check(pw > 1e-3, (std::string(what) + ": ... and flipping p1 instead of p2 is not").c_str(), pw);
+    }
+    char tmpl[] = "/tmp/rp_mirror_test_XXXXXX";
+    const char *t = mkdtemp(tmpl);
+    std::string err;
+    rprd::Sequence back;
+    const bool w = t && rprd::write_sequence(m, t, true, &err);
+    const bool r = w && (s.format == rprd::Format::KITTI ? rprd::load_kitti(t, 0, 0, &back, &err)
+                                                        : rprd::load_euroc(t, 0, 0, &back, &err));
+    const double db = r ? std::fmax(rig_diff(m.rig, back.rig), truth_diff(m, back)) : 1e9;
+    check(r && db < 1e-9 && back.utime.size() == s.utime.size() &&
+              back.utime.back() - back.utime[0] == s.utime.back() - s.utime[0],
+          (std::string(what) + ": mirror image written and read back: same rig, truth, times " + err).c_str(), db);
+    if (r) {
+        check(flipped_copy(s.img[1][0], back.img[0][0]) && flipped_copy(s.img[0].back(), back.img[1].back()),
+              (std::string(what) + ": ... its left images are the right ones flipped, and back").c_str(), 0.0);
+    }
+    if (t) {
+        std::error_code ec;
+        std::filesystem::remove_all(t, ec);
     }
 }
 
@@ -419,6 +594,14 @@ int main()
         }
         if (ok_e) {
             check_direct(data + "/kitti00_000-099", e);
+        }
+        /* the mirror image's geometry on the real clips (first 3 frames each) */
+        rprd::Sequence k3, e3;
+        if (rprd::load_kitti(data + "/kitti00_000-099", 0, 3, &k3, &err)) {
+            check_mirror("mirror: kitti00", k3);
+        }
+        if (rprd::load_euroc(data + "/euroc_mh01_000-149", 0, 3, &e3, &err)) {
+            check_mirror("mirror: euroc_mh01", e3);
         }
         rprd::Sequence bad;
         err.clear();
