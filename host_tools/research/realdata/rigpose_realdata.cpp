@@ -8,14 +8,14 @@
  * absolute trajectory error (ATE: RMSE of the translation errors over the frames) in metres
  * and in percent of the true path's length.
  *
- * Each dataset has its own settings ("profile", printed at start): the EKF's plant noise suits
- * its motion (a car at 10 Hz: smooth, small angular acceleration; a hand-held sensor at 20 Hz:
- * shaking, strong angular acceleration), the tracker's features, grid and pyramid suit its
- * images, the stereo search range suits its baseline and scene depths. Options override them.
+ * The settings are the core's defaults (rp_pipe_default_cfg), whatever the dataset, or those of
+ * a configuration file (--config FILE, the daemon's parser); command-line options override
+ * single settings. Every setting that differs from the core's default is printed on stderr.
+ * The only per-dataset inputs are the calibration and the frame times.
  *
- * usage: rigpose-realdata (--kitti DIR | --euroc DIR) [--frames N] [--first K] [--name NAME]
- *            [--quiet] [--json-out FILE] [--check-ate-m X] [--check-ate-percent X]
- *            [--replay-out DIR [--copy-images]] [--no-run] [profile overrides, see --help]
+ * usage: rigpose-realdata (--kitti DIR | --euroc DIR) [--config FILE] [--frames N] [--first K]
+ *            [--name NAME] [--quiet] [--json-out FILE] [--check-ate-m X] [--check-ate-percent X]
+ *            [--replay-out DIR [--copy-images]] [--no-run] [settings, see --help]
  * Exit status: 0 done (and checks passed), 1 a check failed or the run broke, 2 bad usage/data.
  */
 #include <algorithm>
@@ -34,8 +34,10 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "rigpose/rp_config.h"
 #include "rigpose/rp_pipe.h"
 #include "rp_direct.hpp"
+#include "rp_mirror.hpp"
 #include "rp_realdata.hpp"
 #include "../../common/rp_cfg_diff.h"
 #include "../../common/rp_cv.hpp"
@@ -44,132 +46,140 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/* The per-dataset settings of the pipeline. */
-struct Profile {
-    double q_trans, q_rot; /* EKF plant noise, m^2/s^3 and rad^2/s^3 */
-    double sigma_px;       /* measurement noise, px */
-    int target;            /* features per camera */
-    int levels, win, min_dist, grid_x, grid_y;
-    double match_min_depth_m, match_max_depth_m; /* stereo search along the ray */
-    int match_half_win;    /* stereo patch half side, px */
-    int match_subpix;      /* stereo: 1-D LK iterations after the parabola (0: parabola only) */
-    double fb_max_px;      /* tracker's forward-backward tolerance, px */
-    double match_min_zncc; /* stereo: lowest accepted patch score */
-    double max_depth_m;    /* triangulated landmarks kept up to this depth */
-    int min_tracked;       /* re-initialise under this many landmarks */
-    int refine;            /* structure EKF per landmark (1) or the first triangulation (0) */
-    int iterations;        /* Gauss-Newton iterations of the EKF update */
-    double gate_chi2;      /* per-feature Mahalanobis gate */
-    double dt_s;           /* nominal frame interval */
-};
-
-/* KITTI: a car at 8 m/s, 10 Hz, 1241x376, baseline 0.54 m; near points move tens of pixels a
- * frame (4 pyramid levels), depths 3..80 m. Plant noise: accelerations of a car (about 1 m/s^2,
- * yaw acceleration well under 1 rad/s^2). */
-Profile kitti_profile()
+/* The pipeline's settings: the core's defaults for stereo2 (rp_pipe_default_cfg), or the
+ * estimator and tracker sections of a rigpose configuration file (config/README.md, read by the
+ * daemon's parser rp_config_load, which starts from the same defaults). The file's cameras,
+ * source and lcm sections are not used: the rig is the dataset's calibration. In both the
+ * pair is the dataset's numbering, camera 0 left, camera 1 right. */
+bool base_cfg(const std::string &config, rp_pipe_cfg_t *cfg, std::string *err)
 {
-    Profile p;
-    p.q_trans = 1.0;
-    p.q_rot = 0.05;
-    p.sigma_px = 0.5;
-    p.target = 300;
-    p.levels = 4;
-    p.win = 21;
-    p.min_dist = 12;
-    p.grid_x = 12;
-    p.grid_y = 4;
-    p.match_min_depth_m = 2.0;
-    p.match_max_depth_m = 100.0;
-    p.match_half_win = 4;
-    p.match_subpix = 5;
-    p.fb_max_px = 1.0;
-    p.match_min_zncc = 0.8;
-    p.max_depth_m = 80.0;
-    p.min_tracked = 80;
-    p.refine = 1;
-    p.iterations = 3;
-    p.gate_chi2 = 13.8;
-    p.dt_s = 0.1;
-    return p;
-}
-
-/* EuRoC MH01: hand-held shaking at 20 Hz, 752x480 with strong radial distortion, baseline
- * 0.11 m, depths 1..15 m. Plant noise: a shaken sensor (accelerations of several m/s^2 and
- * rad/s^2). */
-Profile euroc_profile()
-{
-    Profile p;
-    p.q_trans = 4.0;
-    p.q_rot = 4.0;
-    p.sigma_px = 0.5;
-    p.target = 250;
-    p.levels = 4;
-    p.win = 21;
-    p.min_dist = 12;
-    p.grid_x = 8;
-    p.grid_y = 6;
-    p.match_min_depth_m = 0.5;
-    p.match_max_depth_m = 30.0;
-    p.match_half_win = 4;
-    p.match_subpix = 5;
-    p.fb_max_px = 1.0;
-    p.match_min_zncc = 0.8;
-    p.max_depth_m = 30.0;
-    p.min_tracked = 60;
-    p.refine = 1;
-    p.iterations = 3;
-    p.gate_chi2 = 13.8;
-    p.dt_s = 0.05;
-    return p;
-}
-
-void print_profile(const char *name, const Profile &p)
-{
-    std::printf("profile %s: EKF q_trans %g m^2/s^3, q_rot %g rad^2/s^3, sigma %g px; "
-                "tracker %d features, %d levels, window %d, min dist %d px, grid %dx%d; "
-                "stereo search %g..%g m, patch %dx%d, ZNCC >= %g, landmarks to %g m, re-init under %d\n",
-                name, p.q_trans, p.q_rot, p.sigma_px, p.target, p.levels, p.win, p.min_dist,
-                p.grid_x, p.grid_y, p.match_min_depth_m, p.match_max_depth_m, 2 * p.match_half_win + 1,
-                2 * p.match_half_win + 1, p.match_min_zncc, p.max_depth_m,
-                p.min_tracked);
-}
-
-rp_status_t make_cfg(const Profile &pr, rp_pipe_cfg_t *cfg)
-{
-    rp_status_t st = rp_pipe_default_cfg(RP_PIPE_STEREO2, cfg);
-    if (st != RP_OK) {
-        return st;
+    if (config.empty()) {
+        if (rp_pipe_default_cfg(RP_PIPE_STEREO2, cfg) != RP_OK) {
+            *err = "rp_pipe_default_cfg(stereo2) failed";
+            return false;
+        }
+    } else {
+        static rp_config_t file; /* large (the rig, the HAL's paths): static */
+        char msg[RP_CFG_ERR_MAX];
+        if (rp_config_load(config.c_str(), &file, msg, sizeof msg) != RP_CFG_OK) {
+            *err = msg;
+            return false;
+        }
+        if (file.pipe.layout != RP_PIPE_STEREO2) {
+            *err = config + ": estimator.method is " + rp_pipe_layout_name(file.pipe.layout) +
+                   "; rigpose-realdata runs stereo2 (one pair)";
+            return false;
+        }
+        *cfg = file.pipe;
     }
-    /* the rig: camera 0 left (cam1), camera 1 right */
     cfg->stereo.n_pairs = 1;
     cfg->stereo.pair_a[0] = 0;
     cfg->stereo.pair_b[0] = 1;
-    cfg->stereo.ekf.q_trans = (rp_real)pr.q_trans;
-    cfg->stereo.ekf.q_rot = (rp_real)pr.q_rot;
-    cfg->stereo.ekf.sigma_px = (rp_real)pr.sigma_px;
-    cfg->stereo.max_depth_m = (rp_real)pr.max_depth_m;
-    cfg->stereo.min_tracked = (uint16_t)pr.min_tracked;
-    cfg->stereo.refine_structure = (uint8_t)pr.refine;
-    cfg->stereo.ekf.iterations = (uint8_t)pr.iterations;
-    cfg->stereo.ekf.gate_chi2 = (rp_real)pr.gate_chi2;
-    cfg->stereo.default_dt_s = (rp_real)pr.dt_s;
-    cfg->track.target = (uint16_t)pr.target;
-    cfg->track.topup_below = (uint16_t)(pr.target * 4 / 5);
-    cfg->track.levels = (uint8_t)pr.levels;
-    cfg->track.win = (uint8_t)pr.win;
-    cfg->track.min_dist = (uint16_t)pr.min_dist;
-    cfg->track.grid_x = (uint8_t)pr.grid_x;
-    cfg->track.grid_y = (uint8_t)pr.grid_y;
-    cfg->track.cell_cap = 0;
-    cfg->smatch.min_depth_m = (rp_real)pr.match_min_depth_m;
-    cfg->smatch.max_depth_m = (rp_real)pr.match_max_depth_m;
-    cfg->smatch.half_win = (uint8_t)pr.match_half_win;
-    cfg->smatch.subpix_iter = (uint8_t)pr.match_subpix;
-    cfg->track.fb_max_q16 = (uint32_t)std::lround(pr.fb_max_px * 65536.0);
-    cfg->smatch.min_zncc_q15 = (int16_t)std::lround(pr.match_min_zncc * 32767.0);
-    return RP_OK;
+    return true;
 }
 
+/* One setting of the command line (--q-trans 1 ...) over cfg; the fields it sets go to
+ * *fields (their reason in the deviations printed). False for an unknown option or value. */
+bool apply_override(const std::string &opt, const char *v, rp_pipe_cfg_t *cfg,
+                    std::vector<const char *> *fields)
+{
+    int n1 = 0, n2 = 0;
+    double d1 = 0, d2 = 0;
+    const double x = std::atof(v);
+    const int i = std::atoi(v);
+    if (opt == "--q-trans") {
+        cfg->stereo.ekf.q_trans = (rp_real)x;
+        fields->push_back("stereo.ekf.q_trans");
+    } else if (opt == "--q-rot") {
+        cfg->stereo.ekf.q_rot = (rp_real)x;
+        fields->push_back("stereo.ekf.q_rot");
+    } else if (opt == "--sigma-px") {
+        cfg->stereo.ekf.sigma_px = (rp_real)x;
+        fields->push_back("stereo.ekf.sigma_px");
+    } else if (opt == "--features") {
+        cfg->track.target = (uint16_t)i;
+        cfg->track.topup_below = (uint16_t)(i * 4 / 5);
+        fields->push_back("track.target");
+        fields->push_back("track.topup_below");
+    } else if (opt == "--levels") {
+        cfg->track.levels = (uint8_t)i;
+        fields->push_back("track.levels");
+    } else if (opt == "--win") {
+        cfg->track.win = (uint8_t)i;
+        fields->push_back("track.win");
+    } else if (opt == "--min-dist") {
+        cfg->track.min_dist = (uint16_t)i;
+        fields->push_back("track.min_dist");
+    } else if (opt == "--min-tracked") {
+        cfg->stereo.min_tracked = (uint16_t)i;
+        fields->push_back("stereo.min_tracked");
+    } else if (opt == "--refine") {
+        cfg->stereo.refine_structure = (uint8_t)i;
+        fields->push_back("stereo.refine_structure");
+    } else if (opt == "--iterations") {
+        cfg->stereo.ekf.iterations = (uint8_t)i;
+        fields->push_back("stereo.ekf.iterations");
+    } else if (opt == "--gate") {
+        cfg->stereo.ekf.gate_chi2 = (rp_real)x;
+        fields->push_back("stereo.ekf.gate_chi2");
+    } else if (opt == "--match-subpix") {
+        cfg->smatch.subpix_iter = (uint8_t)i;
+        fields->push_back("smatch.subpix_iter");
+    } else if (opt == "--fb-max") {
+        cfg->track.fb_max_q16 = (uint32_t)std::lround(x * 65536.0);
+        fields->push_back("track.fb_max_q16");
+    } else if (opt == "--match-win") {
+        cfg->smatch.half_win = (uint8_t)i;
+        fields->push_back("smatch.half_win");
+    } else if (opt == "--match-zncc") {
+        cfg->smatch.min_zncc_q15 = (int16_t)std::lround(x * 32767.0);
+        fields->push_back("smatch.min_zncc_q15");
+    } else if (opt == "--max-depth") {
+        cfg->stereo.max_depth_m = (rp_real)x;
+        fields->push_back("stereo.max_depth_m");
+    } else if (opt == "--grid" && std::sscanf(v, "%d,%d", &n1, &n2) == 2) {
+        cfg->track.grid_x = (uint8_t)n1;
+        cfg->track.grid_y = (uint8_t)n2;
+        fields->push_back("track.grid_");
+    } else if (opt == "--match-depth" && std::sscanf(v, "%lf,%lf", &d1, &d2) == 2) {
+        cfg->smatch.min_depth_m = (rp_real)d1;
+        cfg->smatch.max_depth_m = (rp_real)d2;
+        fields->push_back("smatch.min_depth_m");
+        fields->push_back("smatch.max_depth_m");
+    } else {
+        return false;
+    }
+    return true;
+}
+
+void print_settings(const char *from, const rp_pipe_cfg_t &c)
+{
+    std::printf("settings (%s): EKF q_trans %g m^2/s^3, q_rot %g rad^2/s^3, sigma %g px; "
+                "tracker %u features, %u levels, window %u, min dist %u px, grid %ux%u; "
+                "stereo search %g..%g m, patch %dx%d, ZNCC >= %.3g, landmarks to %g m, re-init "
+                "under %u\n",
+                from, (double)c.stereo.ekf.q_trans, (double)c.stereo.ekf.q_rot,
+                (double)c.stereo.ekf.sigma_px, (unsigned)c.track.target, (unsigned)c.track.levels,
+                (unsigned)c.track.win, (unsigned)c.track.min_dist, (unsigned)c.track.grid_x,
+                (unsigned)c.track.grid_y, (double)c.smatch.min_depth_m,
+                (double)c.smatch.max_depth_m, 2 * c.smatch.half_win + 1, 2 * c.smatch.half_win + 1,
+                c.smatch.min_zncc_q15 / 32767.0, (double)c.stereo.max_depth_m,
+                (unsigned)c.stereo.min_tracked);
+}
+
+/* The frame rate of a sequence: its median frame interval (the replay folder's fps). */
+double seq_fps(const rprd::Sequence &seq)
+{
+    std::vector<int64_t> d;
+    for (size_t j = 1; j < seq.utime.size(); ++j) {
+        d.push_back(seq.utime[j] - seq.utime[j - 1]);
+    }
+    if (d.empty()) {
+        return 30.0;
+    }
+    std::nth_element(d.begin(), d.begin() + (long)(d.size() / 2), d.end());
+    return 1e6 / (double)d[d.size() / 2];
+}
 
 std::string flag_text(uint32_t f)
 {
@@ -185,7 +195,7 @@ std::string flag_text(uint32_t f)
 }
 
 /* A replay folder (the shared format): frames.csv, truth.csv, rig.yaml (config/README.md). */
-bool write_replay(const std::string &out, const rprd::Sequence &seq, const Profile &pr,
+bool write_replay(const std::string &out, const rprd::Sequence &seq, const rp_pipe_cfg_t &cfg,
                   bool copy_images)
 {
     std::error_code ec;
@@ -249,21 +259,44 @@ bool write_replay(const std::string &out, const rprd::Sequence &seq, const Profi
                          "               %.12g, %.12g, %.12g,\n"
                          "               %.12g, %.12g, %.12g]\n",
                          names[k], k, (unsigned)c.cam.width, (unsigned)c.cam.height,
-                         (int)std::lround(1.0 / pr.dt_s), (double)c.cam.fx, (double)c.cam.fy,
+                         (int)std::lround(seq_fps(seq)), (double)c.cam.fx, (double)c.cam.fy,
                          (double)c.cam.cx, (double)c.cam.cy, (double)c.cam.k1, (double)c.cam.k2,
                          (double)c.cam.p1, (double)c.cam.p2, (double)c.cam.k3, (double)c.D[0],
                          (double)c.D[1], (double)c.D[2], (double)c.R[0], (double)c.R[1],
                          (double)c.R[2], (double)c.R[3], (double)c.R[4], (double)c.R[5],
                          (double)c.R[6], (double)c.R[7], (double)c.R[8]);
         }
-        std::fprintf(fy,
-                     "\nestimator:\n  method: stereo2\n  pairs: [[left, right]]\n"
-                     "  sigma_px: %g\n  q_trans: %g\n  q_rot: %g\n  min_tracked: %d\n"
-                     "  max_depth_m: %g\n  default_dt_s: %g\n\n"
-                     "tracker:\n  target: %d\n  levels: %d\n  win: %d\n  min_dist: %d\n"
-                     "  grid: [%d, %d]\n",
-                     pr.sigma_px, pr.q_trans, pr.q_rot, pr.min_tracked, pr.max_depth_m, pr.dt_s,
-                     pr.target, pr.levels, pr.win, pr.min_dist, pr.grid_x, pr.grid_y);
+        /* the settings this run used, where they differ from the core's defaults (a key
+         * left out keeps the default of the core that reads the file) */
+        rp_pipe_cfg_t d;
+        (void)rp_pipe_default_cfg(RP_PIPE_STEREO2, &d);
+        const rp_vo_stereo_cfg_t &e = cfg.stereo, &de = d.stereo;
+        const rp_track_cfg_t &t = cfg.track, &dt = d.track;
+        std::fprintf(fy, "\nestimator:\n  method: stereo2\n  pairs: [[left, right]]\n");
+#define RD_KEY(cond, ...) if (cond) { std::fprintf(fy, __VA_ARGS__); }
+        RD_KEY(e.ekf.sigma_px != de.ekf.sigma_px, "  sigma_px: %g\n", (double)e.ekf.sigma_px)
+        RD_KEY(e.ekf.q_trans != de.ekf.q_trans, "  q_trans: %g\n", (double)e.ekf.q_trans)
+        RD_KEY(e.ekf.q_rot != de.ekf.q_rot, "  q_rot: %g\n", (double)e.ekf.q_rot)
+        RD_KEY(e.ekf.gate_chi2 != de.ekf.gate_chi2, "  gate_chi2: %g\n", (double)e.ekf.gate_chi2)
+        RD_KEY(e.ekf.iterations != de.ekf.iterations, "  iterations: %u\n", (unsigned)e.ekf.iterations)
+        RD_KEY(e.min_tracked != de.min_tracked, "  min_tracked: %u\n", (unsigned)e.min_tracked)
+        RD_KEY(e.min_depth_m != de.min_depth_m, "  min_depth_m: %g\n", (double)e.min_depth_m)
+        RD_KEY(e.max_depth_m != de.max_depth_m, "  max_depth_m: %g\n", (double)e.max_depth_m)
+        RD_KEY(e.refine_structure != de.refine_structure, "  refine_structure: %s\n",
+               e.refine_structure ? "true" : "false")
+        std::fprintf(fy, "  default_dt_s: %g\n\ntracker:\n", 1.0 / seq_fps(seq));
+        RD_KEY(t.target != dt.target, "  target: %u\n", (unsigned)t.target)
+        RD_KEY(t.levels != dt.levels, "  levels: %u\n", (unsigned)t.levels)
+        RD_KEY(t.win != dt.win, "  win: %u\n", (unsigned)t.win)
+        RD_KEY(t.min_dist != dt.min_dist, "  min_dist: %u\n", (unsigned)t.min_dist)
+        RD_KEY(t.fb_max_q16 != dt.fb_max_q16, "  fb_max_px: %g\n", t.fb_max_q16 / 65536.0)
+        RD_KEY(t.grid_x != dt.grid_x || t.grid_y != dt.grid_y, "  grid: [%u, %u]\n",
+               (unsigned)t.grid_x, (unsigned)t.grid_y)
+#undef RD_KEY
+        if (std::memcmp(&cfg.smatch, &d.smatch, sizeof d.smatch) != 0) {
+            std::fprintf(fy, "# (this run's stereo matcher settings differ from the core's; the "
+                             "schema has no keys for them)\n");
+        }
     }
     ok = ok && (!ff || std::fclose(ff) == 0);
     ok = ok && (!ft || std::fclose(ft) == 0);
@@ -375,12 +408,27 @@ void usage(FILE *f)
     std::fprintf(
         f,
         "usage: rigpose-realdata (--kitti DIR | --euroc DIR) [options]\n"
-        "  --kitti DIR          KITTI odometry folder (calib.txt, times.txt, poses.txt,\n"
-        "                       left/ + right/ or image_0/ + image_1/)\n"
-        "  --euroc DIR          EuRoC MAV folder (cam0/, cam1/ with data.csv and sensor.yaml,\n"
-        "                       groundtruth.txt in TUM format)\n"
+        "  --kitti DIR          KITTI odometry folder: calib.txt (P0 left, P1 right: lines\n"
+        "                       \"P0: <12 numbers>\", \"P1: ...\" or P_rect_00 / P_rect_01, or\n"
+        "                       without labels the first two lines of 12 numbers, 3x4 row-\n"
+        "                       major), poses.txt (per frame 12 numbers: 3x4 [R|t] row-major,\n"
+        "                       the left camera at frame j in frame 0's), times.txt (s per\n"
+        "                       frame; or --fps), images NNNNNN.png in image_0/ + image_1/,\n"
+        "                       image_l/ + image_r/ or left/ + right/ (first found; --images)\n"
+        "  --euroc DIR          EuRoC MAV folder (or its mav0/): cam0/ (left), cam1/ (right)\n"
+        "                       with sensor.yaml and data.csv (t[ns],file; every listed image\n"
+        "                       must exist); the body's ground truth: groundtruth.txt, TUM\n"
+        "                       \"t[s] tx ty tz qx qy qz qw\" (qw LAST), else EuRoC's own\n"
+        "                       state_groundtruth_estimate0/data.csv \"t[ns], px, py, pz, qw,\n"
+        "                       qx, qy, qz, ...\" (qw FIRST); told apart by the time column\n"
+        "                       (over 1e12: ns). The first pose read is printed: check it\n"
+        "  --truth FILE         the ground-truth file (KITTI poses / TUM / EuRoC csv format)\n"
+        "  --images L,R         KITTI: the left and right image folders under DIR\n"
+        "  --fps HZ             KITTI: frame j at j / HZ s (times.txt not read; for folders\n"
+        "                       without it)\n"
         "  --frames N           N frames (default: all)\n"
-        "  --first K            start at frame K (its left camera is the world; default 0)\n"
+        "  --first K            start at frame K (frames, not file lines: EuRoC counts the\n"
+        "                       timestamps both cameras list; its left camera is the world)\n"
         "  --name NAME          prefix of the JSON figures (default kitti00 / euroc_mh01)\n"
         "  --quiet              no per-frame lines\n"
         "  --json-out FILE      write the figures as one flat JSON object\n"
@@ -394,6 +442,11 @@ void usage(FILE *f)
         "  --direct-ref         also run dense direct stereo odometry (rp_direct.hpp:\n"
         "                       SGBM depth + photometric alignment, no features; rectified\n"
         "                       pairs only, about 1 s per frame) as a second yardstick\n"
+        "  --mirror             run on the clip's mirror image instead (cameras swapped, images\n"
+        "                       flipped left-right, calibration and truth mirrored: rp_mirror.hpp),\n"
+        "                       written to a temporary folder removed at exit\n"
+        "  --mirror-out DIR     the same, the mirror image written to DIR (kept; the same format\n"
+        "                       as the input; with --no-run only written)\n"
         "  --steps              print each frame-to-frame step (length, rotation, direction)\n"
         "                       of the truth, rigpose and the yardsticks run\n"
         "  --direct-rows A,B    the direct yardstick uses image rows A..B-1 only (e.g. the\n"
@@ -401,7 +454,13 @@ void usage(FILE *f)
         "  --splice K           with --direct-ref: also score the yardstick's steps up to\n"
         "                       frame K followed by the truth's own steps (what an estimator\n"
         "                       exact from frame K on but true to the images before scores)\n"
-        "profile overrides: --q-trans Q --q-rot Q --sigma-px S --features N --levels L --win W\n"
+        "  --config FILE        the estimator and tracker settings of a rigpose configuration\n"
+        "                       file (config/README.md; method stereo2; its cameras, source\n"
+        "                       and lcm are not used: the rig is the dataset's calibration).\n"
+        "                       Without it: the core's defaults (rp_pipe_default_cfg). The\n"
+        "                       settings that differ from the defaults are printed on stderr.\n"
+        "                       Example files: host_tools/research/realdata/profiles/\n"
+        "settings (over the defaults or FILE): --q-trans Q --q-rot Q --sigma-px S --features N --levels L --win W\n"
         "  --min-dist D --grid X,Y --max-depth M --match-depth MIN,MAX --match-win H\n"
         "  --match-zncc Z --match-subpix N --fb-max PX --min-tracked N --refine 0|1\n"
         "  --iterations N --gate CHI2\n");
@@ -411,8 +470,10 @@ void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
-    std::string kitti, euroc, name, json_out, replay_out;
+    std::string kitti, euroc, name, json_out, replay_out, config, mirror_out;
+    bool mirror = false;
     size_t frames = 0, first = 0;
+    rprd::LoadOpts lo;
     bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
     bool direct_ref = false, steps = false;
     size_t splice = 0;
@@ -435,6 +496,8 @@ int main(int argc, char **argv)
             opencv_ref = true;
         } else if (a == "--direct-ref") {
             direct_ref = true;
+        } else if (a == "--mirror") {
+            mirror = true;
         } else if (a == "--steps") {
             steps = true;
         } else if (!has_val) {
@@ -450,6 +513,28 @@ int main(int argc, char **argv)
             frames = (size_t)std::strtoul(argv[++i], nullptr, 10);
         } else if (a == "--first") {
             first = (size_t)std::strtoul(argv[++i], nullptr, 10);
+        } else if (a == "--images") {
+            const std::string v = argv[++i];
+            const size_t comma = v.find(',');
+            if (comma == std::string::npos || comma == 0 || comma + 1 >= v.size()) {
+                std::fprintf(stderr, "rigpose-realdata: --images LEFT,RIGHT (folder names)\n");
+                return 2;
+            }
+            lo.left = v.substr(0, comma);
+            lo.right = v.substr(comma + 1);
+        } else if (a == "--fps") {
+            lo.fps = std::atof(argv[++i]);
+            if (!(lo.fps > 0.0 && lo.fps < 1e4)) {
+                std::fprintf(stderr, "rigpose-realdata: --fps HZ: a frame rate > 0\n");
+                return 2;
+            }
+        } else if (a == "--mirror-out") {
+            mirror_out = argv[++i];
+            mirror = true;
+        } else if (a == "--config") {
+            config = argv[++i];
+        } else if (a == "--truth") {
+            lo.truth = argv[++i];
         } else if (a == "--name") {
             name = argv[++i];
         } else if (a == "--json-out") {
@@ -483,71 +568,93 @@ int main(int argc, char **argv)
     rprd::Sequence seq;
     std::string err;
     const bool is_kitti = !kitti.empty();
-    if (!(is_kitti ? rprd::load_kitti(kitti, first, frames, &seq, &err)
-                   : rprd::load_euroc(euroc, first, frames, &seq, &err))) {
+    lo.first = first;
+    lo.max_frames = frames;
+    if (!(is_kitti ? rprd::load_kitti(kitti, lo, &seq, &err)
+                   : rprd::load_euroc(euroc, lo, &seq, &err))) {
         std::fprintf(stderr, "rigpose-realdata: %s\n", err.c_str());
         return 2;
     }
-    seq.name = !name.empty() ? name : (is_kitti ? "kitti00" : "euroc_mh01");
-    Profile pr = is_kitti ? kitti_profile() : euroc_profile();
+    for (const std::string &n : seq.notes) {
+        std::printf("read %s\n", n.c_str());
+    }
+    /* --mirror: write the clip's mirror image (rp_mirror.hpp) and run on that instead */
+    struct TmpDir {
+        std::string path;
+        ~TmpDir()
+        {
+            std::error_code ec;
+            if (!path.empty()) {
+                fs::remove_all(path, ec);
+            }
+        }
+    } tmp;
+    if (mirror) {
+        std::string out = mirror_out;
+        if (out.empty()) {
+            const char *td = std::getenv("TMPDIR");
+            std::string tmpl = std::string(td && *td ? td : "/tmp") + "/rigpose_mirror_XXXXXX";
+            if (!mkdtemp(&tmpl[0])) {
+                std::fprintf(stderr, "rigpose-realdata: %s: cannot make a temporary folder\n",
+                             tmpl.c_str());
+                return 1;
+            }
+            out = tmp.path = tmpl;
+        }
+        rprd::Sequence m;
+        if (!rprd::write_sequence(rprd::mirror_sequence(seq), out, true, &err) ||
+            !(is_kitti ? rprd::load_kitti(out, 0, 0, &m, &err)
+                       : rprd::load_euroc(out, 0, 0, &m, &err))) {
+            std::fprintf(stderr, "rigpose-realdata: mirror image: %s\n", err.c_str());
+            return 1;
+        }
+        std::printf("mirror image of frames %zu..%zu of %s (cameras swapped, images flipped, "
+                    "calibration and truth mirrored) in %s%s\n",
+                    first, first + seq.utime.size() - 1, seq.dir.c_str(), out.c_str(),
+                    tmp.path.empty() ? "" : " (removed at exit)");
+        seq = m;
+        first = 0;
+    }
+    seq.name = !name.empty() ? name
+                             : std::string(is_kitti ? "kitti00" : "euroc_mh01") + (mirror ? "_mirror" : "");
+    static rp_pipe_cfg_t cfg;
+    if (!base_cfg(config, &cfg, &err)) {
+        std::fprintf(stderr, "rigpose-realdata: %s\n", err.c_str());
+        return 2;
+    }
+    std::vector<const char *> cli_fields;
     for (const auto &o : over) {
-        const char *v = o.second.c_str();
-        int n1 = 0, n2 = 0;
-        double d1 = 0, d2 = 0;
-        if (o.first == "--q-trans") {
-            pr.q_trans = std::atof(v);
-        } else if (o.first == "--q-rot") {
-            pr.q_rot = std::atof(v);
-        } else if (o.first == "--sigma-px") {
-            pr.sigma_px = std::atof(v);
-        } else if (o.first == "--features") {
-            pr.target = std::atoi(v);
-        } else if (o.first == "--levels") {
-            pr.levels = std::atoi(v);
-        } else if (o.first == "--win") {
-            pr.win = std::atoi(v);
-        } else if (o.first == "--min-dist") {
-            pr.min_dist = std::atoi(v);
-        } else if (o.first == "--min-tracked") {
-            pr.min_tracked = std::atoi(v);
-        } else if (o.first == "--refine") {
-            pr.refine = std::atoi(v);
-        } else if (o.first == "--iterations") {
-            pr.iterations = std::atoi(v);
-        } else if (o.first == "--gate") {
-            pr.gate_chi2 = std::atof(v);
-        } else if (o.first == "--match-subpix") {
-            pr.match_subpix = std::atoi(v);
-        } else if (o.first == "--fb-max") {
-            pr.fb_max_px = std::atof(v);
-        } else if (o.first == "--match-win") {
-            pr.match_half_win = std::atoi(v);
-        } else if (o.first == "--match-zncc") {
-            pr.match_min_zncc = std::atof(v);
-        } else if (o.first == "--max-depth") {
-            pr.max_depth_m = std::atof(v);
-        } else if (o.first == "--grid" && std::sscanf(v, "%d,%d", &n1, &n2) == 2) {
-            pr.grid_x = n1;
-            pr.grid_y = n2;
-        } else if (o.first == "--match-depth" && std::sscanf(v, "%lf,%lf", &d1, &d2) == 2) {
-            pr.match_min_depth_m = d1;
-            pr.match_max_depth_m = d2;
-        } else {
+        if (!apply_override(o.first, o.second.c_str(), &cfg, &cli_fields)) {
             std::fprintf(stderr, "rigpose-realdata: %s %s: unknown option or bad value\n",
-                         o.first.c_str(), v);
+                         o.first.c_str(), o.second.c_str());
             return 2;
         }
     }
+    /* what differs from the core's defaults, one line each on stderr: the rig's numbering, the
+     * settings of the command line, those of the configuration file */
+    const std::string why_file = config.empty() ? "" : "config " + config;
+    const char *table[48][2] = {{"stereo.pair_", "the dataset's numbering: 0 left, 1 right"}};
+    size_t nt = 1;
+    for (size_t k = 0; k < cli_fields.size() && nt < 46; ++k, ++nt) {
+        table[nt][0] = cli_fields[k];
+        table[nt][1] = "command line";
+    }
+    table[nt][0] = "";
+    table[nt][1] = why_file.c_str();
+    table[nt + 1][0] = nullptr;
+    table[nt + 1][1] = nullptr;
+    (void)rp_cfg_diff_print(stderr, "rigpose-realdata", &cfg, table);
     const rp_camera_t &c0 = seq.rig.cam[0].cam;
-    std::printf("%s: %zu frames from frame %zu of %s; %ux%u, fx %.3f, baseline %.4f m\n", seq.name.c_str(),
-                seq.utime.size(), first, seq.dir.c_str(), (unsigned)c0.width, (unsigned)c0.height,
-                (double)c0.fx,
+    std::printf("%s: %zu frames from frame %zu of %s; %ux%u, fx %.3f, baseline %.4f m, %.2f Hz\n",
+                seq.name.c_str(), seq.utime.size(), first, seq.dir.c_str(), (unsigned)c0.width,
+                (unsigned)c0.height, (double)c0.fx,
                 std::sqrt((double)(seq.rig.cam[1].D[0] * seq.rig.cam[1].D[0] +
                                    seq.rig.cam[1].D[1] * seq.rig.cam[1].D[1] +
-                                   seq.rig.cam[1].D[2] * seq.rig.cam[1].D[2])));
-    print_profile(is_kitti ? "kitti" : "euroc", pr);
+                                   seq.rig.cam[1].D[2] * seq.rig.cam[1].D[2])),
+                seq_fps(seq));
+    print_settings(config.empty() ? "the core's defaults" : why_file.c_str(), cfg);
     if (!replay_out.empty()) {
-        if (!write_replay(replay_out, seq, pr, copy_images)) {
+        if (!write_replay(replay_out, seq, cfg, copy_images)) {
             return 1;
         }
         std::printf("replay folder: %s\n", replay_out.c_str());
@@ -557,19 +664,7 @@ int main(int argc, char **argv)
     }
 
     static rp_pipe_t pipe; /* large (trackers' pyramids): static */
-    rp_pipe_cfg_t cfg;
-    rp_status_t st = make_cfg(pr, &cfg);
-    if (st == RP_OK) {
-        /* the per-format profile (README.md; its removal is a later issue), the rig's numbering
-         * (0 left, 1 right) and --set options: one line per change from the core's default */
-        char why[64];
-        std::snprintf(why, sizeof why, "profile %s", is_kitti ? "kitti" : "euroc");
-        const char *const table[][2] = {{"stereo.pair_", "the dataset's numbering: 0 left, 1 right"},
-                                        {"", why},
-                                        {nullptr, nullptr}};
-        (void)rp_cfg_diff_print(stderr, "rigpose-realdata", &cfg, table);
-        st = rp_pipe_init(&pipe, &seq.rig, &cfg);
-    }
+    rp_status_t st = rp_pipe_init(&pipe, &seq.rig, &cfg);
     if (st != RP_OK) {
         std::fprintf(stderr, "rigpose-realdata: pipeline set-up: %s (image %ux%u; this build "
                              "takes at most %dx%d)\n",

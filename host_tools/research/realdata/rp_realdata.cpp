@@ -9,6 +9,9 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <cstdarg>
+#include <cstdio>
+#include <sys/stat.h>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -134,7 +137,34 @@ struct Gt {
     Pose T;
 };
 
-bool load_tum(const std::string &path, std::vector<Gt> *gt, std::string *err)
+bool file_exists(const std::string &path)
+{
+    struct stat st;
+    return stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+bool dir_exists(const std::string &path)
+{
+    struct stat st;
+    return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+std::string fmt(const char *f, ...) __attribute__((format(printf, 1, 2)));
+std::string fmt(const char *f, ...)
+{
+    char buf[512];
+    va_list ap;
+    va_start(ap, f);
+    std::vsnprintf(buf, sizeof buf, f, ap);
+    va_end(ap);
+    return buf;
+}
+
+/* Body poses of a ground-truth file, either format: TUM (t[s] tx ty tz qx qy qz qw, spaces) or
+ * EuRoC's state_groundtruth_estimate0/data.csv (t[ns], px, py, pz, qw, qx, qy, qz, then
+ * velocities and biases, commas). The first line's time tells which: over 1e12 is nanoseconds
+ * (EuRoC; 1e12 s would be 31700 years). *note: the file, its columns, its first pose as read. */
+bool load_truth(const std::string &path, std::vector<Gt> *gt, std::string *note, std::string *err)
 {
     std::ifstream f(path);
     if (!f) {
@@ -143,20 +173,48 @@ bool load_tum(const std::string &path, std::vector<Gt> *gt, std::string *err)
     std::string line;
     std::vector<double> v;
     int ln = 0;
+    int euroc = -1; /* -1: not known yet */
     while (std::getline(f, line)) {
         ++ln;
+        if (!line.empty() && line.back() == '\r') {
+            line.pop_back();
+        }
         if (line.empty() || line[0] == '#') {
             continue;
         }
-        if (!parse_numbers(line, &v) || v.size() != 8) {
-            return fail(err, path + ":" + std::to_string(ln) + ": expected t tx ty tz qx qy qz qw");
+        if (!parse_numbers(line, &v) || v.empty()) {
+            return fail(err, path + ":" + std::to_string(ln) + ": not a line of numbers");
+        }
+        if (euroc < 0) {
+            euroc = v[0] > 1e12 ? 1 : 0;
+        }
+        if (euroc ? v.size() < 8 : v.size() != 8) {
+            return fail(err, path + ":" + std::to_string(ln) +
+                                 (euroc ? ": expected t[ns], px, py, pz, qw, qx, qy, qz, ... "
+                                          "(EuRoC's state_groundtruth_estimate0/data.csv)"
+                                        : ": expected t[s] tx ty tz qx qy qz qw (TUM)"));
         }
         Gt g;
-        g.utime = (int64_t)std::llround(v[0] * 1e6);
-        const rp_real q[4] = {(rp_real)v[7], (rp_real)v[4], (rp_real)v[5], (rp_real)v[6]};
+        /* q = (w, x, y, z) for rp_rot_from_quat */
+        rp_real q[4];
+        if (euroc) {
+            g.utime = (int64_t)std::llround(v[0] * 1e-3);
+            q[0] = (rp_real)v[4];
+            q[1] = (rp_real)v[5];
+            q[2] = (rp_real)v[6];
+            q[3] = (rp_real)v[7];
+        } else {
+            g.utime = (int64_t)std::llround(v[0] * 1e6);
+            q[0] = (rp_real)v[7];
+            q[1] = (rp_real)v[4];
+            q[2] = (rp_real)v[5];
+            q[3] = (rp_real)v[6];
+        }
+        const double qn = std::sqrt((double)(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]));
         rp_real R[9];
-        if (rp_rot_from_quat(q, R) != RP_OK) {
-            return fail(err, path + ":" + std::to_string(ln) + ": bad quaternion");
+        if (std::fabs(qn - 1.0) > 1e-3 || rp_rot_from_quat(q, R) != RP_OK) {
+            return fail(err, path + ":" + std::to_string(ln) +
+                                 fmt(": quaternion of norm %.6f, not a unit quaternion", qn));
         }
         for (int i = 0; i < 9; ++i) {
             g.T.R[i] = (double)R[i];
@@ -164,9 +222,18 @@ bool load_tum(const std::string &path, std::vector<Gt> *gt, std::string *err)
         for (int i = 0; i < 3; ++i) {
             g.T.t[i] = v[(size_t)(1 + i)];
         }
+        if (gt->empty()) {
+            *note = path +
+                    (euroc ? ": EuRoC csv t[ns], px, py, pz, qw, qx, qy, qz (qw first)"
+                           : ": TUM t[s] tx ty tz qx qy qz qw (qw last)") +
+                    fmt("; first pose read (line %d): t %.6f s, position %.6f %.6f %.6f m, "
+                        "quaternion qw %.6f qx %.6f qy %.6f qz %.6f",
+                        ln, (double)g.utime * 1e-6, v[1], v[2], v[3], (double)q[0],
+                        (double)q[1], (double)q[2], (double)q[3]);
+        }
         gt->push_back(g);
     }
-    std::sort(gt->begin(), gt->end(), [](const Gt &a, const Gt &b) { return a.utime < b.utime; });
+    std::sort(gt->begin(), gt->end(), [](const Gt &x, const Gt &y) { return x.utime < y.utime; });
     if (gt->empty()) {
         return fail(err, path + ": no pose");
     }
@@ -234,8 +301,21 @@ bool load_euroc_list(const std::string &dir, std::vector<int64_t> *t_ns,
         if (comma == std::string::npos || end != line.c_str() + comma || comma + 1 >= line.size()) {
             return fail(err, path + ":" + std::to_string(ln) + ": expected timestamp,filename");
         }
+        std::string file = line.substr(comma + 1);
+        file.erase(0, file.find_first_not_of(' '));
+        file = dir + "/data/" + file;
+        if (!file_exists(file)) {
+            return fail(err, path + ":" + std::to_string(ln) + ": lists " + file +
+                                 ", which does not exist (the first missing image)");
+        }
+        if (!t_ns->empty() && (int64_t)t <= t_ns->back()) {
+            return fail(err, path + ":" + std::to_string(ln) + ": timestamps not increasing");
+        }
         t_ns->push_back((int64_t)t);
-        files->push_back(dir + "/data/" + line.substr(comma + 1));
+        files->push_back(file);
+    }
+    if (t_ns->empty()) {
+        return fail(err, path + ": lists no image");
     }
     return true;
 }
@@ -297,65 +377,152 @@ Pose pose_from_vec(const double p[6])
     return T;
 }
 
-bool load_kitti(const std::string &dir, size_t first, size_t max_frames, Sequence *seq,
-                std::string *err)
+namespace {
+
+bool max_frames_reached(const LoadOpts &o, size_t n)
+{
+    return o.max_frames != 0 && n >= o.max_frames;
+}
+
+/* calib.txt's P0 and P1: labelled lines (P0: / P1:, or KITTI raw's P_rect_00: / P_rect_01:),
+ * else the first two lines of exactly 12 numbers. */
+bool load_kitti_calib(const std::string &path, std::vector<double> P[2], std::string *note,
+                      std::string *err)
+{
+    std::ifstream fc(path);
+    if (!fc) {
+        return fail(err, path + ": cannot open");
+    }
+    std::string line;
+    std::vector<double> v;
+    std::vector<std::vector<double>> bare;
+    int ln = 0;
+    while (std::getline(fc, line)) {
+        ++ln;
+        if (!line.empty() && line.back() == '\r') {
+            line.pop_back();
+        }
+        const size_t colon = line.find(':');
+        if (colon == std::string::npos) {
+            if (parse_numbers(line, &v) && v.size() == 12) {
+                bare.push_back(v);
+            }
+            continue;
+        }
+        std::string key = line.substr(0, colon);
+        key.erase(0, key.find_first_not_of(' '));
+        const int k = key == "P0" || key == "P_rect_00" ? 0
+                      : key == "P1" || key == "P_rect_01" ? 1
+                                                           : -1;
+        if (k < 0) {
+            continue;
+        }
+        if (!parse_numbers(line.substr(colon + 1), &v) || v.size() != 12) {
+            return fail(err, path + ":" + std::to_string(ln) + ": " + key + ": expected 12 numbers");
+        }
+        P[k] = v;
+    }
+    if (P[0].empty() && P[1].empty() && bare.size() >= 2) {
+        P[0] = bare[0];
+        P[1] = bare[1];
+        *note = path + ": no P0/P1 labels: the first two lines of 12 numbers are P0 (left), P1 (right)";
+    } else if (P[0].empty() || P[1].empty()) {
+        return fail(err, path + ": P0 and P1 required (lines \"P0: <12 numbers>\", \"P1: ...\", "
+                                "or P_rect_00 / P_rect_01, or two unlabelled lines of 12 numbers)");
+    } else {
+        *note = path + ": P0 (left), P1 (right)";
+    }
+    if (P[0][0] <= 0.0 || P[1][0] <= 0.0 || P[0][3] != 0.0 || P[1][3] >= 0.0) {
+        return fail(err, path + ": P0 must be [K|0] and P1 [K|-fx b] with b > 0 (P1: the right camera)");
+    }
+    return true;
+}
+
+}  // namespace
+
+bool load_kitti(const std::string &dir, const LoadOpts &o, Sequence *seq, std::string *err)
 {
     *seq = Sequence();
     seq->format = Format::KITTI;
     seq->name = "kitti";
     seq->dir = dir;
-    /* calib.txt: P0 and P1 of the rectified pair */
-    std::ifstream fc(dir + "/calib.txt");
-    if (!fc) {
-        return fail(err, dir + "/calib.txt: cannot open");
-    }
     std::vector<double> P[2];
-    std::string line;
-    std::vector<double> v;
-    while (std::getline(fc, line)) {
-        for (int k = 0; k < 2; ++k) {
-            const std::string key = "P" + std::to_string(k) + ":";
-            if (line.compare(0, key.size(), key) == 0) {
-                if (!parse_numbers(line.substr(key.size()), &v) || v.size() != 12) {
-                    return fail(err, dir + "/calib.txt: " + key + " expected 12 numbers");
-                }
-                P[k] = v;
-            }
+    std::string note;
+    if (!load_kitti_calib(dir + "/calib.txt", P, &note, err)) {
+        return false;
+    }
+    seq->notes.push_back(note);
+    char name[32];
+    /* the image folders: given, or the first known pair holding the first frame's left image */
+    std::snprintf(name, sizeof name, "%06zu.png", o.first);
+    std::vector<std::pair<std::string, std::string>> pairs;
+    if (!o.left.empty() || !o.right.empty()) {
+        pairs.emplace_back(o.left.empty() ? "image_0" : o.left, o.right.empty() ? "image_1" : o.right);
+    } else {
+        pairs = {{"image_0", "image_1"}, {"image_l", "image_r"}, {"left", "right"}};
+    }
+    std::string ldir, rdir, tried;
+    for (const auto &pr : pairs) {
+        tried += (tried.empty() ? "" : ", ") + pr.first + "/";
+        if (file_exists(dir + "/" + pr.first + "/" + name)) {
+            ldir = pr.first;
+            rdir = pr.second;
+            break;
         }
     }
-    if (P[0].empty() || P[1].empty()) {
-        return fail(err, dir + "/calib.txt: P0 and P1 required");
+    if (ldir.empty()) {
+        return fail(err, dir + ": no left image " + name + " in " + tried +
+                             " (give the folders with --images LEFT,RIGHT)");
     }
-    if (P[0][0] <= 0.0 || P[1][0] <= 0.0 || P[0][3] != 0.0 || P[1][3] >= 0.0) {
-        return fail(err, dir + "/calib.txt: P0 must be [K|0] and P1 [K|-fx b] with b > 0");
+    seq->notes.push_back(dir + ": images " + ldir + "/ (left), " + rdir + "/ (right)");
+    /* times.txt (unless a frame rate is given) and poses.txt: one line per frame */
+    const std::string tpath = dir + "/times.txt";
+    const std::string ppath = o.truth.empty() ? dir + "/poses.txt" : o.truth;
+    std::ifstream ft, fp(ppath);
+    if (o.fps > 0.0) {
+        seq->notes.push_back(fmt("times: frame j at j / %g s (--fps)%s", o.fps,
+                                 file_exists(tpath) ? "; times.txt not read" : ""));
+    } else {
+        ft.open(tpath);
+        if (!ft) {
+            return fail(err, tpath + ": cannot open (without it, give the frame rate: --fps HZ)");
+        }
+        seq->notes.push_back("times: " + tpath + " (s)");
     }
-    char name[32];
-    std::snprintf(name, sizeof name, "%06zu.png", (size_t)0);
-    const std::string first_img = dir + "/left/" + name;
-    const std::string image_dir = std::ifstream(first_img) ? "/left/" : "/image_0/";
-    const std::string right_dir = image_dir == "/left/" ? "/right/" : "/image_1/";
-    /* times.txt and poses.txt: one line per frame */
-    std::ifstream ft(dir + "/times.txt"), fp(dir + "/poses.txt");
-    if (!ft || !fp) {
-        return fail(err, dir + ": times.txt and poses.txt required");
+    if (!fp) {
+        return fail(err, ppath + ": cannot open (the ground truth, KITTI poses format)");
     }
     std::string lt, lp;
+    std::vector<double> v;
     int ln = 0;
     Pose T0_inv;
-    while (std::getline(ft, lt) && std::getline(fp, lp)) {
+    while (std::getline(fp, lp)) {
         ++ln;
-        if (max_frames && seq->utime.size() >= max_frames) {
+        if (max_frames_reached(o, seq->utime.size())) {
             break;
         }
         std::vector<double> tv;
-        if (!parse_numbers(lt, &tv) || tv.size() != 1) {
-            return fail(err, dir + "/times.txt:" + std::to_string(ln) + ": expected seconds");
+        if (o.fps > 0.0) {
+            tv.assign(1, (double)(ln - 1) / o.fps);
+        } else if (!std::getline(ft, lt)) {
+            break; /* times.txt ends: so do the frames */
+        } else if (!parse_numbers(lt, &tv) || tv.size() != 1) {
+            return fail(err, tpath + ":" + std::to_string(ln) + ": expected seconds");
         }
         if (!parse_numbers(lp, &v) || v.size() != 12) {
-            return fail(err, dir + "/poses.txt:" + std::to_string(ln) + ": expected 12 numbers");
+            return fail(err, ppath + ":" + std::to_string(ln) +
+                                 ": expected 12 numbers (3x4 [R|t] row-major)");
+        }
+        if (ln == 1) {
+            seq->notes.push_back(
+                ppath + fmt(": KITTI 3x4 [R|t] row-major per line (left camera at frame j in frame "
+                            "0's); first pose read (line 1): t %.6f %.6f %.6f m, R rows "
+                            "[%.6f %.6f %.6f] [%.6f %.6f %.6f] [%.6f %.6f %.6f]",
+                            v[3], v[7], v[11], v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9],
+                            v[10]));
         }
         const size_t j = (size_t)(ln - 1); /* the file's frame index */
-        if (j < first) {
+        if (j < o.first) {
             continue;
         }
         Pose T = pose_from_3x4(v);
@@ -364,17 +531,24 @@ bool load_kitti(const std::string &dir, size_t first, size_t max_frames, Sequenc
             T0_inv = pose_inv(T); /* the first frame is the world */
         }
         std::snprintf(name, sizeof name, "%06zu.png", j);
+        const std::string im[2] = {dir + "/" + ldir + "/" + name, dir + "/" + rdir + "/" + name};
+        for (int k = 0; k < 2; ++k) {
+            if (!file_exists(im[k])) {
+                return fail(err, im[k] + ": no such image (frame " + std::to_string(j) + " of " +
+                                     ppath + ", the first missing one; --frames N stops before it)");
+            }
+        }
         seq->utime.push_back((int64_t)std::llround(tv[0] * 1e6));
-        seq->img[0].push_back(dir + image_dir + name);
-        seq->img[1].push_back(dir + right_dir + name);
+        seq->img[0].push_back(im[0]);
+        seq->img[1].push_back(im[1]);
         seq->truth.push_back(pose_mul(T0_inv, T));
     }
     if (seq->utime.empty()) {
-        return fail(err, dir + ": no frame");
+        return fail(err, dir + ": no frame" + (o.first ? " from frame " + std::to_string(o.first) : ""));
     }
     for (size_t j = 1; j < seq->utime.size(); ++j) {
         if (seq->utime[j] <= seq->utime[j - 1]) {
-            return fail(err, dir + "/times.txt: times not increasing at frame " + std::to_string(j));
+            return fail(err, tpath + ": times not increasing at frame " + std::to_string(o.first + j));
         }
     }
     /* the image size (calib.txt does not hold it): the first left image's */
@@ -393,13 +567,20 @@ bool load_kitti(const std::string &dir, size_t first, size_t max_frames, Sequenc
     return true;
 }
 
-bool load_euroc(const std::string &dir, size_t first, size_t max_frames, Sequence *seq,
-                std::string *err)
+bool load_euroc(const std::string &dir_in, const LoadOpts &o, Sequence *seq, std::string *err)
 {
     *seq = Sequence();
     seq->format = Format::EUROC;
     seq->name = "euroc";
+    /* EuRoC's own archives hold everything under mav0/ */
+    const std::string dir = !dir_exists(dir_in + "/cam0") && dir_exists(dir_in + "/mav0/cam0")
+                                ? dir_in + "/mav0"
+                                : dir_in;
     seq->dir = dir;
+    if (o.fps > 0.0 || !o.left.empty() || !o.right.empty()) {
+        return fail(err, "EuRoC: the frames and times are cam0/ and cam1/'s data.csv (no --fps, "
+                         "--images)");
+    }
     rp_camera_t cam[2];
     Pose T_BS[2];
     std::vector<int64_t> t_ns[2];
@@ -411,16 +592,26 @@ bool load_euroc(const std::string &dir, size_t first, size_t max_frames, Sequenc
             return false;
         }
     }
+    seq->notes.push_back(dir + ": cam0/ (left), cam1/ (right): sensor.yaml, data.csv (t[ns],file)");
     set_pair_cams(&seq->rig, cam[0], cam[1], pose_mul(pose_inv(T_BS[0]), T_BS[1]));
+    std::string gpath = o.truth;
+    if (gpath.empty()) {
+        gpath = dir + "/groundtruth.txt";
+        if (!file_exists(gpath) && file_exists(dir + "/state_groundtruth_estimate0/data.csv")) {
+            gpath = dir + "/state_groundtruth_estimate0/data.csv";
+        }
+    }
     std::vector<Gt> gt;
-    if (!load_tum(dir + "/groundtruth.txt", &gt, err)) {
+    std::string note;
+    if (!load_truth(gpath, &gt, &note, err)) {
         return false;
     }
-    /* frames: cam0's list; cam1 must hold the same timestamp */
-    size_t i1 = 0;
+    seq->notes.push_back(note);
+    /* frames: the timestamps both lists hold, counted from 0 (--first skips frames, not rows) */
+    size_t i1 = 0, frame = 0;
     Pose C0_inv;
-    for (size_t i = first; i < t_ns[0].size(); ++i) {
-        if (max_frames && seq->utime.size() >= max_frames) {
+    for (size_t i = 0; i < t_ns[0].size(); ++i) {
+        if (max_frames_reached(o, seq->utime.size())) {
             break;
         }
         while (i1 < t_ns[1].size() && t_ns[1][i1] < t_ns[0][i]) {
@@ -428,6 +619,9 @@ bool load_euroc(const std::string &dir, size_t first, size_t max_frames, Sequenc
         }
         if (i1 >= t_ns[1].size() || t_ns[1][i1] != t_ns[0][i]) {
             continue; /* no right image at this time: not a stereo frame */
+        }
+        if (frame++ < o.first) {
+            continue;
         }
         const int64_t ut = t_ns[0][i] / 1000;
         auto it = std::lower_bound(gt.begin(), gt.end(), ut,
@@ -440,8 +634,8 @@ bool load_euroc(const std::string &dir, size_t first, size_t max_frames, Sequenc
             best = &*(it - 1);
         }
         if (!best || std::llabs((long long)(best->utime - ut)) > 2500) {
-            return fail(err, dir + "/groundtruth.txt: no pose within 2.5 ms of frame " +
-                                 std::to_string(seq->utime.size()));
+            return fail(err, gpath + ": no pose within 2.5 ms of frame " +
+                                 std::to_string(frame - 1) + " (" + files[0][i] + ")");
         }
         const Pose T_WC = pose_mul(best->T, T_BS[0]);
         if (seq->truth.empty()) {
@@ -453,7 +647,9 @@ bool load_euroc(const std::string &dir, size_t first, size_t max_frames, Sequenc
         seq->truth.push_back(pose_mul(C0_inv, T_WC));
     }
     if (seq->utime.empty()) {
-        return fail(err, dir + ": no stereo frame");
+        return fail(err, dir + ": no stereo frame" +
+                             (o.first ? fmt(" from frame %zu (%zu in all)", o.first, frame)
+                                      : std::string()));
     }
     return true;
 }

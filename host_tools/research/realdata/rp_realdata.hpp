@@ -10,12 +10,18 @@
  * camera of the pair (KITTI image_0 / "left", EuRoC cam0), rig camera 1 the right one.
  *
  *   KITTI:  poses.txt line j is [R|t] taking points of the left camera at frame j into the left
- *           camera at frame 0: exactly (R_j, d_j). Rectified pinhole pair: P0, P1 of calib.txt,
- *           the right camera at D = (-P1[0][3] / P1[0][0], 0, 0), no rotation, no distortion.
- *   EuRoC:  camera pose in the world T_WC = T_WB T_BS (groundtruth.txt body pose at the nearest
- *           timestamp, T_BS of the camera's sensor.yaml); expressed in the first frame's cam0:
+ *           camera at frame 0: exactly (R_j, d_j). Rectified pinhole pair: P0, P1 of calib.txt
+ *           (lines "P0: ..." and "P1: ...", or "P_rect_00:" / "P_rect_01:", or without labels
+ *           the first two lines of 12 numbers), the right camera at
+ *           D = (-P1[0][3] / P1[0][0], 0, 0), no rotation, no distortion. Times: times.txt (s,
+ *           one line per frame) or a frame rate given.
+ *   EuRoC:  camera pose in the world T_WC = T_WB T_BS (body pose at the nearest timestamp, T_BS
+ *           of the camera's sensor.yaml); expressed in the first frame's cam0:
  *           T_j = T_WC0(0)^-1 T_WC0(j). The pair: R_1, D_1 of T_BS0^-1 T_BS1; intrinsics and
- *           radial-tangential distortion (k1 k2 p1 p2, k3 = 0) per camera.
+ *           radial-tangential distortion (k1 k2 p1 p2, k3 = 0) per camera. Body poses from
+ *           groundtruth.txt (TUM: t[s] tx ty tz qx qy qz qw, qw last) or EuRoC's own
+ *           state_groundtruth_estimate0/data.csv (t[ns], px, py, pz, qw, qx, qy, qz, ..., qw
+ *           first); the format is told by the time column (nanoseconds: over 1e12).
  */
 #ifndef RP_REALDATA_HPP
 #define RP_REALDATA_HPP
@@ -52,15 +58,48 @@ struct Sequence {
     std::vector<int64_t> utime;            /* per frame, us */
     std::vector<std::string> img[2];       /* per frame: left and right image paths */
     std::vector<Pose> truth;               /* per frame: cam1 in the world (first cam1 frame) */
+    std::vector<std::string> notes;        /* what the loader read, one line each (folders,
+                                            * times, the truth's columns and first pose) */
 };
 
-/* Load max_frames frames (0: all) of a folder from its frame `first` on; that frame's cam1 is
- * the world. On failure returns false with a message in *err (missing file, malformed line,
- * no ground truth near a frame, no frame...). */
-bool load_kitti(const std::string &dir, size_t first, size_t max_frames, Sequence *seq,
-                std::string *err);
-bool load_euroc(const std::string &dir, size_t first, size_t max_frames, Sequence *seq,
-                std::string *err);
+/* What a loader takes besides the folder. */
+struct LoadOpts {
+    size_t first = 0;      /* frames skipped: stereo frames (a KITTI line, an EuRoC timestamp
+                            * both cameras list), never file rows; that frame's cam1 is the world */
+    size_t max_frames = 0; /* frames loaded, 0: all */
+    std::string left, right; /* KITTI: the image folders under the folder; empty: the first of
+                              * image_0/image_1, image_l/image_r, left/right that holds the
+                              * first frame's left image */
+    double fps = 0.0;      /* KITTI: > 0: frame j (of the file) at j / fps s, times.txt not read */
+    std::string truth;     /* ground-truth file; empty: KITTI poses.txt; EuRoC groundtruth.txt
+                            * (TUM), else state_groundtruth_estimate0/data.csv (EuRoC's own) */
+};
+
+/* Load a KITTI odometry / EuRoC MAV folder. The file formats (column orders) are those of
+ * rigpose-realdata --help; seq->notes says which files and folders were read, and the first
+ * ground-truth pose as read, in words (a file whose columns are in another order shows there).
+ * On failure returns false with a message in *err (missing file or image, naming the first;
+ * malformed line with its number; folders tried; no ground truth near a frame; no frame...). */
+bool load_kitti(const std::string &dir, const LoadOpts &o, Sequence *seq, std::string *err);
+bool load_euroc(const std::string &dir, const LoadOpts &o, Sequence *seq, std::string *err);
+
+/* The same with only first and max_frames. */
+inline bool load_kitti(const std::string &dir, size_t first, size_t max_frames, Sequence *seq,
+                       std::string *err)
+{
+    LoadOpts o;
+    o.first = first;
+    o.max_frames = max_frames;
+    return load_kitti(dir, o, seq, err);
+}
+inline bool load_euroc(const std::string &dir, size_t first, size_t max_frames, Sequence *seq,
+                       std::string *err)
+{
+    LoadOpts o;
+    o.first = first;
+    o.max_frames = max_frames;
+    return load_euroc(dir, o, seq, err);
+}
 
 /* Trajectory error against the truth, frame by frame, no alignment beyond the shared start
  * (both start at the identity). */

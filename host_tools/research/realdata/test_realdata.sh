@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # test_realdata.sh - rigpose's stereo layout on short pieces of the real sequences (run by
-# `make test`): 20 frames of each, the ATE within the data README's targets (KITTI 00: 1 % of
-# the path; EuRoC MH01: 0.03 m). The data is ../shared/data beside the repository, or
+# `make test`): 20 frames of each with the core's default settings (no configuration file, no
+# per-dataset profile), the ATE within the data README's targets (KITTI 00: 1 % of the path;
+# EuRoC MH01: 0.03 m); and --config FILE (the daemon's parser) on a profile file. The data is ../shared/data beside the repository, or
 # $RIGPOSE_DATA; without it the test
 # prints a SKIPPED line naming the data (counted as skipped by tests/summary.sh) and exits 0.
 # KITTI runs frames 50-69: the ground truth of frames 0-13 is a constant-velocity extrapolation
@@ -24,7 +25,23 @@ run() { # name, then the program's arguments
   if "$bin" "$@" --quiet; then pass=$((pass + 1)); echo "[       OK ] $name"
   else fail=$((fail + 1)); echo "[  FAILED  ] $name"; fi
 }
+# The core's defaults, no configuration file: one configuration for every clip (issue 14).
 run kitti00_50_69 --kitti "$kitti" --first 50 --frames 20 --check-ate-percent 1.0
 run euroc_mh01_0_19 --euroc "$euroc" --first 0 --frames 20 --check-ate-m 0.03
+# --config FILE: the daemon's parser; its settings are printed as deviations naming the file,
+# and a file of another method is refused (exit 2).
+prof=$root/host_tools/research/realdata/profiles/kitti00.yaml
+msg=$("$bin" --kitti "$kitti" --frames 2 --no-run --config "$prof" 2>&1 >/dev/null)
+if grep -q "stereo.ekf.q_trans=1 (core default 3): config $prof" <<<"$msg" &&
+   ! "$bin" --kitti "$kitti" --frames 2 --no-run 2>&1 >/dev/null | grep -q "q_trans"; then
+  pass=$((pass + 1)); echo "[       OK ] config_file_settings"
+else fail=$((fail + 1)); echo "[  FAILED  ] config_file_settings: $msg"; fi
+bad=$(mktemp /tmp/rp_realdata_cfg_XXXXXX.yaml)
+sed 's/method: stereo2/method: gc/; s/  pairs: .*/  cams: [left, right]/' "$prof" > "$bad"
+"$bin" --kitti "$kitti" --frames 2 --no-run --config "$bad" >/dev/null 2>"$bad.err"; rc=$?
+if [ $rc -eq 2 ] && grep -q "runs stereo2" "$bad.err"; then
+  pass=$((pass + 1)); echo "[       OK ] config_file_other_method_refused"
+else fail=$((fail + 1)); echo "[  FAILED  ] config_file_other_method_refused: rc $rc $(cat "$bad.err")"; fi
+rm -f "$bad" "$bad.err"
 echo "[  PASSED  ] $pass test(s)."
 if [ $fail -ne 0 ]; then echo "[  FAILED  ] $fail test(s)."; exit 1; fi
