@@ -645,6 +645,8 @@ static void test_feeding_a_tracker(void **s)
     assert_status(rp_track_features(&fed, NULL, 1, &n), RP_E_ARG);
     assert_status(rp_track_next_serial(NULL, &k0), RP_E_ARG);
     assert_status(rp_track_current_pyr(&fed, NULL), RP_E_ARG);
+}
+
 /* Every sub-pixel weight pair: the Q7 bilinear weights are each in 0..128, within 1/2 of the
  * exact bilinear weight of the rounded fractions, and sum to exactly 128; and an all-255 patch
  * interpolates to exactly 255 x 128 at every pair (no int16 lane overflows: UBSan would stop
