@@ -26,7 +26,14 @@
  *     freedom; 9.21 keeps 99 % of the inliers). A point behind its camera is an outlier. The
  *     hypothesis with the most inliers wins; ties go to the lower truncated cost
  *     sum min(w e^2, thresh^2) (MSAC's).
- *  5. Adaptive count: after each better hypothesis, with k_c of the best's inliers among camera
+ *  5. Local optimisation (LO-RANSAC: O. Chum, J. Matas, J. Kittler, "Locally Optimized
+ *     RANSAC", DAGM 2003), when local_opt: each new best with at least min_inliers inliers is
+ *     refined at once by Lowe's method on its inliers and re-scored, kept if better. A P3P pose
+ *     from three noisy points gathers only part of the inliers; counting from that part
+ *     underestimates the inlier ratio and overestimates N. Measured on rp_sim (6 cameras,
+ *     1714 observations, 60 % outliers): 317 -> 193 draws per solve, 18-23 -> 10-13 ms (host,
+ *     -O2), the same pose error.
+ *     Adaptive count: after each better hypothesis, with k_c of the best's inliers among camera
  *     c's n_c usable observations, the probability that one draw is all-inlier is
  *         s = sum_c (n_c / n_s) C(k_c, 3) / C(n_c, 3)
  *     (for one camera, or equal ratios, s ~ w^3 with w the inlier ratio), and
@@ -63,6 +70,7 @@ typedef struct {
     uint32_t max_iter;   /* draws at most (default 2000) */
     uint32_t min_inliers;/* consensus needed to succeed (default 8; at least 4) */
     uint8_t refine_rounds; /* Lowe + re-score rounds (default 3; 0: the hypothesis as it is) */
+    uint8_t local_opt;   /* 1: Lowe on every new best's inliers during the draws (default 1) */
     rp_lowe_params_t lowe; /* Lowe's method on the inliers (default rp_lowe_default_params) */
 } rp_ransac_params_t;
 

@@ -28,6 +28,7 @@ rp_ransac_params_t rp_ransac_default_params(void)
     prm.max_iter = 2000;
     prm.min_inliers = 8;
     prm.refine_rounds = 3;
+    prm.local_opt = 1;
     prm.lowe = rp_lowe_default_params();
     return prm;
 }
@@ -176,6 +177,34 @@ static int rig_pose_from_cam(const rp_rig_cam_t *ck, const rp_p3p_pose_t *cp, rp
         return 0;
     }
     return rp_all_finite(p, 6);
+}
+
+/* Lowe's method on the inliers of pose p (score *sc), from p; the result replaces p and *sc
+ * if it scores better (rp_ransac.h, step 5). Uses rs->cand and rs->sel. */
+static void local_opt(rp_ransac_t *rs, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
+                      uint32_t n_usable, const rp_ransac_params_t *prm, rp_real thr2,
+                      rp_real p[6], score_t *sc)
+{
+    score_t s0, s1;
+    if (!score_pose(rs, rig, obs, n, n_usable, p, thr2, 0, rs->cand, &s0)) {
+        return;
+    }
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (rs->cand[i]) {
+            rs->sel[m++] = obs[i];
+        }
+    }
+    rp_real q[6];
+    memcpy(q, p, sizeof q);
+    const rp_status_t st = rp_lowe_solve(rig, rs->sel, m, &prm->lowe, q, NULL, NULL);
+    if (st != RP_OK && st != RP_E_NO_CONVERGE) {
+        return;
+    }
+    if (score_pose(rs, rig, obs, n, n_usable, q, thr2, sc->inl, NULL, &s1) && better(&s1, sc)) {
+        *sc = s1;
+        memcpy(p, q, sizeof q);
+    }
 }
 
 /* ---- the solver --------------------------------------------------------------------------- */
@@ -370,6 +399,9 @@ rp_status_t rp_ransac_solve(rp_ransac_t *rs, const rp_rig_t *rig, const rp_obs_t
                 best = sc;
                 memcpy(best_p, p, sizeof best_p);
                 have = 1;
+                if (prm.local_opt && best.inl >= prm.min_inliers) {
+                    local_opt(rs, rig, obs, n, n_usable, &prm, thr2, best_p, &best);
+                }
                 need = needed_iters(rs, rig, &best, n_samp, &prm);
             }
         }
