@@ -407,7 +407,8 @@ static void test_turn_onset_with_outliers_is_refound_by_ransac(void **state)
     assert_true(worst[0] > 2.0 * worst[1]); /* the test can fail */
 }
 
-/* The same input gives the same output, bit for bit: RANSAC's generator is seeded at init. */
+/* The same input gives the same output, bit for bit: the generators of rig RANSAC and 1-point
+ * RANSAC are seeded at init. */
 static void test_ransac_runs_are_deterministic(void **state)
 {
     (void)state;
@@ -415,6 +416,7 @@ static void test_ransac_runs_are_deterministic(void **state)
     for (int r = 0; r < 2; ++r) {
         fixture_t *fx = fixture(0.5, 25, 4);
         rp_vo_stereo_cfg_t cfg = stereo_cfg(2, 0.5);
+        cfg.one_point = 1;
         assert_ok(rp_vo_stereo_init(&fx->vo, &fx->sim.sr.rig, &cfg));
         set_outliers(0.3, 1, 24);
         for (uint32_t j = 0; j < 25; ++j) {
@@ -426,6 +428,49 @@ static void test_ransac_runs_are_deterministic(void **state)
         simfx_free(fx);
     }
     assert_memory_equal(p[0], p[1], sizeof(p[0]));
+}
+
+/* Feature-level simulation with 30 % gross outliers (uniform pixels, drawn anew every frame) in
+ * every camera at every frame. The issue's target is 1.5x the clean figure in every component;
+ * not reached. Measured (2 runs x 60 frames): with rig and 1-point RANSAC 2.3-3.9x, also with
+ * quarantine = 3
+ * 1.5-1.9x (an outlier drawn anew every frame says nothing about its track, which a dropped
+ * landmark wastes; real clips score worse with it, config/README.md, so it is not a default);
+ * the rest of the gap: a landmark is only triangulated at a (re-)initialisation when its pixels
+ * are inliers in both cameras of its pair (49 %), so the dirty run holds fewer landmarks. The
+ * test pins 2.5x with quarantine = 3, and that the method before issue 14 (neither RANSAC) is
+ * worse than that (it is 100x and more); the other figures are printed beside it. */
+static void test_thirty_percent_gross_outliers_everywhere(void **state)
+{
+    (void)state;
+    const int runs = 2;
+    const uint32_t frames = 60;
+    static const char *const label[4] = {
+        "stereo4, 30 % outliers, both RANSACs", "  and quarantine 3", "  rig RANSAC only",
+        "  neither RANSAC (before)"};
+    double clean[6] = {0}, dirty[4][6] = {{0}};
+    for (int r = 0; r < runs; ++r) {
+        double err[6];
+        uint32_t flags;
+        fixture_t *fx = fixture(0.5, frames, (uint32_t)r);
+        const rp_vo_stereo_cfg_t def = stereo_cfg(2, 0.5);
+        assert_int_equal(run_sequence(fx, &def, frames, NULL, err, &flags), 0);
+        for (int i = 0; i < 6; ++i) clean[i] += err[i] / runs;
+        for (int m = 0; m < 4; ++m) {
+            rp_vo_stereo_cfg_t cfg = def;
+            cfg.quarantine = m == 1 ? 3 : 0;
+            cfg.one_point = m < 2;
+            cfg.ransac = m < 3;
+            set_outliers(0.3, 0, frames);
+            (void)run_sequence(fx, &cfg, frames, gross_outliers, err, &flags);
+            for (int i = 0; i < 6; ++i) dirty[m][i] += err[i] / runs;
+        }
+        simfx_free(fx);
+    }
+    simfx_print_err("stereo4 clean", clean);
+    for (int m = 0; m < 4; ++m) simfx_print_err(label[m], dirty[m]);
+    for (int i = 0; i < 6; ++i) assert_true(dirty[1][i] <= 2.5 * clean[i]);
+    for (int i = 0; i < 6; ++i) assert_true(dirty[3][i] > 2.5 * clean[i]); /* it can fail */
 }
 
 static void test_malformed_frameset_is_rejected_without_damage(void **state)
@@ -457,6 +502,9 @@ static void test_bad_configuration_is_refused(void **state)
     cfg = stereo_cfg(1, 0.5);
     cfg.ransac = 2; /* a switch is 0 or 1 */
     assert_status(rp_vo_stereo_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = stereo_cfg(1, 0.5);
+    cfg.one_point = 2;
+    assert_status(rp_vo_stereo_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     simfx_free(fx);
 }
 
@@ -474,6 +522,7 @@ int main(void)
         cmocka_unit_test(test_gross_outliers_at_the_start_are_found_by_ransac),
         cmocka_unit_test(test_turn_onset_with_outliers_is_refound_by_ransac),
         cmocka_unit_test(test_ransac_runs_are_deterministic),
+        cmocka_unit_test(test_thirty_percent_gross_outliers_everywhere),
         cmocka_unit_test(test_malformed_frameset_is_rejected_without_damage),
         cmocka_unit_test(test_bad_configuration_is_refused),
     };

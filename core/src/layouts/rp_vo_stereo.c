@@ -26,6 +26,9 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.default_dt_s = RP_C(1.0) / RP_C(30.0);
     c.refine_structure = 1;
     c.ransac = 1;
+    c.one_point = 0; /* off until it is cheaper: it costs 3.5-4x the frame time of Table 1
+                      * (config/README.md, `one_point`) */
+    c.quarantine = 0; /* config/README.md: 3 helps i.i.d. outliers, costs on real clips */
     return c;
 }
 
@@ -49,7 +52,7 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
     if (cfg->n_pairs < 1 || cfg->n_pairs > RP_MAX_PAIRS || cfg->min_tracked < 6 ||
         !(cfg->max_epipolar_px > RP_C(0.0)) || !(cfg->min_depth_m > RP_C(0.0)) ||
         !(cfg->max_depth_m > cfg->min_depth_m) || !(cfg->max_reproj_px > RP_C(0.0)) ||
-        !(cfg->default_dt_s > RP_C(0.0)) || cfg->ransac > 1) {
+        !(cfg->default_dt_s > RP_C(0.0)) || cfg->ransac > 1 || cfg->one_point > 1) {
         return RP_E_ARG;
     }
     uint8_t in_use[RP_MAX_CAMS] = {0};
@@ -72,6 +75,7 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
     vo->ekf = idle;
     (void)rp_lmtab_clear(&vo->lm);
     (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
+    (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
     return RP_OK;
 }
 
@@ -162,9 +166,12 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
             rp_struct_init(&pt, vo->rig, cams, 2, &pl, M, cfg->ekf.sigma_px) != RP_OK) {
             continue;
         }
-        if (rp_lmtab_insert(&vo->lm, fa->id, k, &pt, NULL) != RP_OK) {
+        uint16_t slot;
+        if (rp_lmtab_insert(&vo->lm, fa->id, k, &pt, &slot) != RP_OK) {
             break; /* table full: keep what we have */
         }
+        vo->strikes[slot] = 0;
+        vo->seen[slot] = 0;
         added++;
     }
     return added;
@@ -199,6 +206,32 @@ static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uin
 }
 
 /* ---- the step ---------------------------------------------------------------------------- */
+
+/* vo->keep[i] = 1 for an observation whose landmark is kept: used now in some camera (its
+ * strikes cleared), or left out of this frame's update in every camera for fewer than
+ * cfg.quarantine frames in a row (its strikes counted). */
+static void quarantine(rp_vo_stereo_t *vo, uint32_t n)
+{
+    uint16_t slot;
+    for (uint32_t i = 0; i < n; ++i) { /* seen[slot]: 1 not used so far, 2 used */
+        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK) {
+            vo->seen[slot] = (uint8_t)(vo->used[i] ? 2 : vo->seen[slot] > 1 ? 2 : 1);
+        }
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        vo->keep[i] = vo->used[i];
+        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) != RP_OK) {
+            continue;
+        }
+        if (vo->seen[slot] == 2) {
+            vo->strikes[slot] = 0;
+        } else if (vo->seen[slot] == 1) {
+            vo->strikes[slot] = (uint8_t)(vo->strikes[slot] < 255 ? vo->strikes[slot] + 1 : 255);
+        }
+        vo->seen[slot] = 0; /* counted once; later observations of it read strikes */
+        vo->keep[i] = (uint8_t)(vo->used[i] || vo->strikes[slot] < vo->cfg.quarantine);
+    }
+}
 
 static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
 {
@@ -418,7 +451,13 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
         return st;
     }
     vo->ekf_pred = vo->ekf;
-    st = rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, info);
+    if (vo->cfg.one_point) {
+        rp_ekf1pt_info_t oi;
+        st = rp_ekf1pt_update(&vo->op, &vo->ekf, vo->rig, vo->obs, n, NULL, vo->used, &oi);
+        *info = oi.ekf;
+    } else {
+        st = rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, info);
+    }
     /* "most features outside the gate": in its final test, also when the update then used them
      * all (rp_ekf.h), or no update for want of features that passed it */
     const int most_gated = st == RP_OK ? 2u * info->n_outside > n
@@ -575,13 +614,15 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     }
     if (st == RP_OK) {
         flags |= RP_EST_TRACKING;
-        /* A landmark whose every observation was gated is an outlier track: drop it. */
+        /* A landmark whose every observation was gated is an outlier track: drop it (with
+         * cfg.quarantine > 0: once it has been so that many frames in a row). */
         for (uint32_t i = 0; i < n; ++i) {
             if (vo->used[i]) {
                 est->n_used[vo->obs[i].cam]++;
             }
         }
-        (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->used, n);
+        quarantine(vo, n);
+        (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->keep, n);
         if (vo->cfg.refine_structure) {
             /* step 4: each used observation updates its landmark at the new pose */
             (void)rp_lmtab_refine(&vo->lm, vo->rig, vo->ekf.x, vo->obs, vo->obs_id, vo->used, n,
