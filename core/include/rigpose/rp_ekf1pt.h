@@ -51,7 +51,7 @@ typedef struct {
 /* Every default, the only place they are written. */
 rp_ekf1pt_params_t rp_ekf1pt_default_params(void);
 
-/* Caller-owned state (about 70 KB in double; make it static). */
+/* Caller-owned state (with the default limits 184 KB in double; make it static). */
 typedef struct {
     uint64_t rng;                        /* xorshift64* state, never 0 */
     uint8_t best[RP_EKF1PT_MAX_OBS];     /* the winner's support */
