@@ -518,6 +518,9 @@ static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
     else if (IS("max_depth_m") && st) v[0] = (double)p->stereo.max_depth_m;
     else if (IS("max_reproj_px") && st) v[0] = (double)p->stereo.max_reproj_px;
     else if (IS("refine_structure") && st) v[0] = p->stereo.refine_structure;
+    else if (IS("ransac") && st) v[0] = p->stereo.ransac;
+    else if (IS("one_point") && st) v[0] = p->stereo.one_point;
+    else if (IS("quarantine") && st) v[0] = p->stereo.quarantine;
     else if (IS("init_depth_m") && !st) {
         v[0] = (double)(gc ? p->gc.init_depth_m : p->mono.init_depth_m);
     } else if (IS("init_depth_sigma_m") && !st) {
@@ -694,7 +697,7 @@ static void test_readme_lists_the_core_defaults(void **state)
     printf("config/README.md: %u estimator and %u tracker defaults match the core's\n",
            est_rows, trk_rows);
     /* every setting the parser knows is listed (rp_config.c's keys but method, pairs, cams) */
-    assert_int_equal(est_rows, 17);
+    assert_int_equal(est_rows, 20);
     assert_int_equal(trk_rows, 7);
 }
 

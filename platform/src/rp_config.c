@@ -648,6 +648,9 @@ static const est_key_t est_keys[] = {
     {"max_depth_m", K_REAL, 0.0, 1e6, 1, 1, {F(stereo.max_depth_m)}},
     {"max_reproj_px", K_REAL, 0.0, 100.0, 1, 1, {F(stereo.max_reproj_px)}},
     {"refine_structure", K_BOOL, 0, 1, 0, 1, {F(stereo.refine_structure)}},
+    {"ransac", K_BOOL, 0, 1, 0, 1, {F(stereo.ransac)}},
+    {"one_point", K_BOOL, 0, 1, 0, 1, {F(stereo.one_point)}},
+    {"quarantine", K_U8, 0, 255, 0, 1, {F(stereo.quarantine)}},
     {"init_depth_m", K_REAL, 0.0, 1e4, 1, 2, {F(gc.init_depth_m), F(mono.init_depth_m)}},
     {"init_depth_sigma_m", K_REAL, 0.0, 1e4, 1, 2,
      {F(gc.init_depth_sigma_m), F(mono.init_depth_sigma_m)}},
@@ -692,6 +695,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         "method",      "pairs",        "cams",          "sigma_px",         "q_trans",
         "q_rot",       "gate_chi2",    "iterations",    "min_features",     "min_tracked",
         "max_epipolar_px", "min_depth_m", "max_depth_m", "max_reproj_px",   "refine_structure",
+        "ransac",      "one_point",    "quarantine",
         "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s",
         "metric_scale_sigma", NULL};
     const char *P = "estimator";

@@ -58,6 +58,9 @@ typedef struct {
     uint16_t n_used;   /* features that entered the final update */
     uint16_t n_gated;  /* features rejected by the gate */
     uint16_t n_bad;    /* features rejected as unprojectable (behind camera, non-finite) */
+    uint16_t n_outside;/* features outside the gate in the final iteration's test, also when
+                        * that iteration then used them all (it rejected more than it kept):
+                        * more than half of them says the prior is wrong, not the features */
     rp_real rms_px;    /* RMS residual per pixel coordinate of the used features, at the last
                         * linearisation point (pixels) */
     uint8_t cov_reset; /* 1 if the covariance had to be reset (numerical fault) */

@@ -8,13 +8,25 @@
  *     cameras) and stored as world landmarks. A re-initialisation backtracks one frame, as the
  *     paper does: it triangulates the previous frame set's matches at the previous pose
  *     estimate, then processes the current frame with them.
- *  2. At the second frame the pose EKF is started from Lowe's method on all correspondences.
+ *  2. At the second frame the pose EKF is started from Lowe's method on all correspondences
+ *     (with `ransac`: on the inliers of a rig RANSAC over every camera, rp_ransac.h; the
+ *     others are left out and their landmarks dropped).
  *  3. Every later frame: EKF prediction, then the iterated update with the pixels of every
  *     tracked landmark in every camera of the layout (eqs. 1-2). (beyond the paper) If the
  *     update's Mahalanobis gate rejects most of one pair's observations, the prediction was
  *     off along a direction the other pair hardly sees: the update is redone from the same
  *     prediction with its pose covariance widened by the gap to Lowe's pose from all
- *     observations, and kept if it uses more of them (n_retried counts these).
+ *     observations, and kept if it uses more of them (n_retried counts these). With `ransac`
+ *     the same happens when the gate rejects most of all observations, or the update fails
+ *     with enough of them, and the pose is re-found from the images: rig RANSAC over every
+ *     camera, Lowe's method on its inliers, and the filter restarted there (pose and its
+ *     covariance from Lowe's method, velocity from the previous pose over dt); the outliers'
+ *     landmarks are dropped (n_refound counts these).
+ *     With `one_point` the update is 1-point RANSAC (rp_ekf1pt.h) instead of the plain gated
+ *     one: hypotheses from single observations through the prior, the low-innovation
+ *     consensus updates, the high-innovation inliers are rescued after it; observations left
+ *     out count as gated (their landmarks are dropped), and "most outside the gate" means most
+ *     left out of that consensus.
  *  4. (beyond the paper) Each landmark's structure EKF takes the frame's observations at the
  *     updated pose, so the structure improves instead of staying at its first triangulation.
  *  A landmark missing from a frame (its track lost in both cameras) is dropped for good.
@@ -23,10 +35,12 @@
 #define RP_VO_STEREO_H
 
 #include "rp_ekf.h"
+#include "rp_ekf1pt.h"
 #include "rp_frame.h"
 #include "rp_lmtab.h"
 #include "rp_lowe.h"
 #include "rp_obs.h"
+#include "rp_ransac.h"
 #include "rp_rig.h"
 #include "rp_stereo.h"
 #include "rp_struct.h"
@@ -49,11 +63,21 @@ typedef struct {
     uint8_t refine_structure;       /* 1: a structure EKF per landmark refines its position with
                                      * every later observation (beyond the paper, which keeps the
                                      * first triangulation); 0: the paper's fixed structure */
+    uint8_t ransac;                 /* 1: the pose is found by rig RANSAC (rp_ransac.h) at the
+                                     * start and re-found by it when the prediction is wrong
+                                     * (beyond the paper); 0: Lowe's method on everything */
+    uint8_t one_point;              /* 1: every update through 1-point RANSAC (rp_ekf1pt.h);
+                                     * 0: the plain gated update */
+    uint8_t quarantine;             /* a landmark left out of the update in every camera is
+                                     * dropped once this happens this many frames in a row
+                                     * (0 or 1: at once) */
 } rp_vo_stereo_cfg_t;
 
 /* Defaults: rp_ekf_default_params with plant noise q_trans = 3 m^2/s^3, q_rot = 3 rad^2/s^3
  * (config/README.md says why); the paper's threshold of 50, 1.5 px epipolar band,
- * 0.05..100 m, 1.5 px, 1/30 s, structure refinement on. No pairs (n_pairs = 0): the caller
+ * 0.05..100 m, 1.5 px, 1/30 s, structure refinement on, rig RANSAC on, 1-point RANSAC off (its cost:
+ * config/README.md), no quarantine.
+ * No pairs (n_pairs = 0): the caller
  * (or rp_pipe_default_cfg) names them. */
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
 
@@ -66,7 +90,14 @@ typedef struct {
     rp_ekf_t ekf;
     rp_ekf_t ekf_pred;                  /* scratch: the prediction, for a retried update */
     uint32_t n_retried;                 /* updates redone because the gate rejected most of a
-                                         * pair (rp_vo_stereo.c, predict_update) */
+                                         * pair or of all (rp_vo_stereo.c, predict_update) */
+    uint32_t n_refound;                 /* of those, poses re-found by rig RANSAC */
+    rp_ransac_t rs;                     /* rig RANSAC's generator and scratch */
+    rp_ekf1pt_t op;                     /* 1-point RANSAC's generator and scratch */
+    uint8_t inl[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: RANSAC's inliers */
+    uint8_t keep[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];/* scratch: obs[i]'s landmark is kept */
+    uint8_t strikes[RP_IDMAP_MAX_SLOTS]; /* per landmark slot: frames in a row left out */
+    uint8_t seen[RP_IDMAP_MAX_SLOTS];    /* scratch of quarantine() */
     rp_lmtab_t lm;                      /* landmarks: world points (m); group = the pair that
                                          * triangulated it; mark = observed (and not gated)
                                          * in the current frame */
@@ -83,7 +114,7 @@ typedef struct {
 
 /* Set up the estimator for rig (which must outlive it) with cfg. The world is cam1's frame at
  * the first frame set. RP_E_ARG (bad config: no pair, camera index out of range, a camera in
- * two pairs), rp_rig_check's errors, rp_stereo_pair_init's errors. */
+ * two pairs, a switch other than 0 or 1), rp_rig_check's errors, rp_stereo_pair_init's errors. */
 rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
                               const rp_vo_stereo_cfg_t *cfg);
 

@@ -241,7 +241,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
     rp_real p[NP];          /* current iterate */
     memcpy(p, x0, sizeof(p));
     memcpy(Cpost, Ppp, sizeof(Cpost)); /* covariance used by the gate */
-    uint16_t n_used = 0, n_gated = 0, n_bad = 0;
+    uint16_t n_used = 0, n_gated = 0, n_bad = 0, n_outside = 0;
     rp_real sq_sum = RP_C(0.0);
 
     for (uint8_t it = 0; it < prm->iterations; ++it) {
@@ -311,6 +311,9 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
                     }
                 }
             }
+            if (pass == 0) {
+                n_outside = n_gated;
+            }
             if (gate && pass == 0 && n_gated > n_used) {
                 gate = 0;
                 continue;
@@ -322,6 +325,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
             info->n_used = 0;
             info->n_gated = n_gated;
             info->n_bad = n_bad;
+            info->n_outside = n_outside;
             if (used) {
                 memset(used, 0, n);
             }
@@ -401,6 +405,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
     info->n_used = n_used;
     info->n_gated = n_gated;
     info->n_bad = n_bad;
+    info->n_outside = n_outside;
     info->rms_px = n_used ? rp_sqrt(sq_sum / (RP_C(2.0) * (rp_real)n_used)) : RP_C(0.0);
     return RP_OK;
 }

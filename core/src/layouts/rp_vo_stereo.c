@@ -9,6 +9,7 @@
 #include "rigpose/rp_vo_stereo.h"
 
 #define MATCH_CAP (2 * RP_MAX_FEATS_PER_CAM)
+#define RANSAC_SEED 0x5EED5u /* any fixed value: the run is a function of its input */
 
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
 {
@@ -24,6 +25,10 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.max_reproj_px = RP_C(1.5);
     c.default_dt_s = RP_C(1.0) / RP_C(30.0);
     c.refine_structure = 1;
+    c.ransac = 1;
+    c.one_point = 0; /* off until it is cheaper: it costs 3.5-4x the frame time of Table 1
+                      * (config/README.md, `one_point`) */
+    c.quarantine = 0; /* config/README.md: 3 helps i.i.d. outliers, costs on real clips */
     return c;
 }
 
@@ -47,7 +52,7 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
     if (cfg->n_pairs < 1 || cfg->n_pairs > RP_MAX_PAIRS || cfg->min_tracked < 6 ||
         !(cfg->max_epipolar_px > RP_C(0.0)) || !(cfg->min_depth_m > RP_C(0.0)) ||
         !(cfg->max_depth_m > cfg->min_depth_m) || !(cfg->max_reproj_px > RP_C(0.0)) ||
-        !(cfg->default_dt_s > RP_C(0.0))) {
+        !(cfg->default_dt_s > RP_C(0.0)) || cfg->ransac > 1 || cfg->one_point > 1) {
         return RP_E_ARG;
     }
     uint8_t in_use[RP_MAX_CAMS] = {0};
@@ -69,6 +74,8 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
     }
     vo->ekf = idle;
     (void)rp_lmtab_clear(&vo->lm);
+    (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
+    (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
     return RP_OK;
 }
 
@@ -159,9 +166,12 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
             rp_struct_init(&pt, vo->rig, cams, 2, &pl, M, cfg->ekf.sigma_px) != RP_OK) {
             continue;
         }
-        if (rp_lmtab_insert(&vo->lm, fa->id, k, &pt, NULL) != RP_OK) {
+        uint16_t slot;
+        if (rp_lmtab_insert(&vo->lm, fa->id, k, &pt, &slot) != RP_OK) {
             break; /* table full: keep what we have */
         }
+        vo->strikes[slot] = 0;
+        vo->seen[slot] = 0;
         added++;
     }
     return added;
@@ -197,6 +207,32 @@ static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uin
 
 /* ---- the step ---------------------------------------------------------------------------- */
 
+/* vo->keep[i] = 1 for an observation whose landmark is kept: used now in some camera (its
+ * strikes cleared), or left out of this frame's update in every camera for fewer than
+ * cfg.quarantine frames in a row (its strikes counted). */
+static void quarantine(rp_vo_stereo_t *vo, uint32_t n)
+{
+    uint16_t slot;
+    for (uint32_t i = 0; i < n; ++i) { /* seen[slot]: 1 not used so far, 2 used */
+        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK) {
+            vo->seen[slot] = (uint8_t)(vo->used[i] ? 2 : vo->seen[slot] > 1 ? 2 : 1);
+        }
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        vo->keep[i] = vo->used[i];
+        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) != RP_OK) {
+            continue;
+        }
+        if (vo->seen[slot] == 2) {
+            vo->strikes[slot] = 0;
+        } else if (vo->seen[slot] == 1) {
+            vo->strikes[slot] = (uint8_t)(vo->strikes[slot] < 255 ? vo->strikes[slot] + 1 : 255);
+        }
+        vo->seen[slot] = 0; /* counted once; later observations of it read strikes */
+        vo->keep[i] = (uint8_t)(vo->used[i] || vo->strikes[slot] < vo->cfg.quarantine);
+    }
+}
+
 static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
 {
     /* Step (1) at frame 0: the world is cam1's frame now, so the pose is exactly zero. */
@@ -221,12 +257,110 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
     return added >= RP_VO_MIN_START ? RP_OK : RP_E_TOO_FEW;
 }
 
-/* Step (2): the second frame starts the filter with Lowe's method on all correspondences;
- * the velocity is the displacement over dt. */
+/* The pose from the images alone: rig RANSAC over every camera's n observations (rp_ransac.h),
+ * then Lowe's method on the inliers from RANSAC's pose. RANSAC's gate is the filter's,
+ * gate_chi2 on a residual of variance 2 sigma_px^2: a landmark triangulated from one frame
+ * set's pixels reprojects into a nearby view with that frame's pixel noise again, besides the
+ * current pixel's. On RP_OK p holds
+ * the pose, cov its covariance per unit pixel variance, the outliers have w = 0 and vo->inl
+ * marks the inliers. */
+static rp_status_t robust_pose(rp_vo_stereo_t *vo, uint32_t n, rp_real p[6], rp_real cov[36],
+                               uint32_t *n_inl)
+{
+    rp_ransac_params_t rp = rp_ransac_default_params();
+    rp.sigma_px = vo->cfg.ekf.sigma_px * RP_C(1.4142135623730951);
+    if (vo->cfg.ekf.gate_chi2 > RP_C(0.0)) {
+        rp.chi2 = vo->cfg.ekf.gate_chi2;
+    }
+    rp.min_inliers = vo->cfg.ekf.min_features > rp.min_inliers ? vo->cfg.ekf.min_features
+                                                               : rp.min_inliers;
+    rp_ransac_result_t res;
+    rp_status_t st = rp_ransac_solve(&vo->rs, vo->rig, vo->obs, n, &rp, vo->inl, &res);
+    if (st != RP_OK) {
+        return st;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!vo->inl[i]) {
+            vo->obs[i].w = RP_C(0.0);
+        }
+    }
+    memcpy(p, res.p, 6 * sizeof(rp_real));
+    uint32_t n_in = res.n_inliers;
+    /* Rescue: the consensus of one camera's P3P poses can leave out a whole camera whose
+     * observations pin a direction the inliers hardly see (the pose is off along it by more
+     * than the pixel gate shows in that camera). Each round, Lowe's method on the inliers, then
+     * every outlier whose innovation passes the filter's gate with the pose's uncertainty,
+     * r^T (J s2 cov J^T + 2 s2 I)^-1 r <= chi2, joins (Civera et al.'s rescue of high-innovation
+     * inliers, with Lowe's covariance as the posterior). Measured on the blind-direction test
+     * (test_vo_stereo.c): without it the start kept 74 of 122 observations, none of camera 3's,
+     * and was 3.4 mm off; with it all, and 0.6 mm, as Lowe's method on everything. */
+    const rp_real s2 = rp.sigma_px * rp.sigma_px / RP_C(2.0); /* sigma_px^2 */
+    for (int round = 0; round < 4; ++round) {
+        st = rp_lowe_solve(vo->rig, vo->obs, n, &rp.lowe, p, NULL, cov);
+        if ((st != RP_OK && st != RP_E_NO_CONVERGE) || !rp_all_finite(p, 6)) {
+            return st != RP_OK ? st : RP_E_NAN;
+        }
+        rp_pose_lin_t pl;
+        if (round == 3 || rp_pose_lin_set(&pl, p) != RP_OK) {
+            break;
+        }
+        uint32_t added = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            rp_real uv[2], J[12], JC[12], S[4];
+            if (vo->inl[i] || !rp_all_finite(vo->obs[i].uv, 2) ||
+                rp_rig_project(vo->rig, vo->obs[i].cam, &pl, vo->obs[i].M, uv, J, NULL) != RP_OK) {
+                continue;
+            }
+            for (int r = 0; r < 2; ++r) {
+                for (int j = 0; j < 6; ++j) {
+                    rp_real acc = RP_C(0.0);
+                    for (int k = 0; k < 6; ++k) {
+                        acc += J[r * 6 + k] * cov[k * 6 + j];
+                    }
+                    JC[r * 6 + j] = acc;
+                }
+            }
+            for (int r = 0; r < 2; ++r) {
+                for (int c = 0; c < 2; ++c) {
+                    rp_real acc = RP_C(0.0);
+                    for (int k = 0; k < 6; ++k) {
+                        acc += JC[r * 6 + k] * J[c * 6 + k];
+                    }
+                    S[r * 2 + c] = s2 * acc + (r == c ? RP_C(2.0) * s2 : RP_C(0.0));
+                }
+            }
+            const rp_real du = vo->obs[i].uv[0] - uv[0], dv = vo->obs[i].uv[1] - uv[1];
+            const rp_real det = S[0] * S[3] - S[1] * S[2];
+            if (det > RP_C(0.0) &&
+                (S[3] * du * du - (S[1] + S[2]) * du * dv + S[0] * dv * dv) / det <= rp.chi2) {
+                vo->inl[i] = 1;
+                vo->obs[i].w = RP_C(1.0);
+                added++;
+            }
+        }
+        if (added == 0) {
+            break;
+        }
+        n_in += added;
+    }
+    *n_inl = n_in;
+    return RP_OK;
+}
+
+/* Step (2): the second frame starts the filter with Lowe's method on all correspondences
+ * (with cfg.ransac: on rig RANSAC's inliers); the velocity is the displacement over dt. */
 static rp_status_t start_with_lowe(rp_vo_stereo_t *vo, uint32_t n, rp_real dt)
 {
     rp_lowe_params_t lp = rp_lowe_default_params();
     rp_real p[6] = {0}, cov[36];
+    uint32_t n_inl = 0;
+    if (vo->cfg.ransac && robust_pose(vo, n, p, cov, &n_inl) == RP_OK) {
+        memcpy(vo->used, vo->inl, n);
+        return rp_vo_ekf_from_pose(&vo->ekf, &vo->cfg.ekf, p, cov, vo->prev_p, dt);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        vo->obs[i].w = RP_C(1.0); /* a failed RANSAC may have left weights */
+    }
     for (int i = 0; i < 6; ++i) {
         p[i] = vo->ekf.x[i];
     }
@@ -317,9 +451,77 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
         return st;
     }
     vo->ekf_pred = vo->ekf;
-    st = rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, info);
-    if (st != RP_OK || !pair_rejected(vo, n)) {
+    if (vo->cfg.one_point) {
+        rp_ekf1pt_info_t oi;
+        st = rp_ekf1pt_update(&vo->op, &vo->ekf, vo->rig, vo->obs, n, NULL, vo->used, &oi);
+        *info = oi.ekf;
+    } else {
+        st = rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, info);
+    }
+    /* "most features outside the gate": in its final test, also when the update then used them
+     * all (rp_ekf.h), or no update for want of features that passed it */
+    const int most_gated = st == RP_OK ? 2u * info->n_outside > n
+                                       : n >= vo->cfg.ekf.min_features;
+    if (!(st == RP_OK && pair_rejected(vo, n)) && !(vo->cfg.ransac && most_gated)) {
         return st;
+    }
+    /* keep the first update's result, to restore it if the retry is no better */
+    const rp_ekf_t first = vo->ekf;
+    const rp_ekf_info_t first_info = *info;
+    /* observations that agree with the first update: used and inside its final gate test */
+    const uint16_t first_n =
+        st != RP_OK ? 0
+        : (uint16_t)(first_info.n_used + first_info.n_gated > first_info.n_outside
+                         ? first_info.n_used + first_info.n_gated - first_info.n_outside
+                         : 0);
+    uint8_t first_used[sizeof vo->used];
+    memcpy(first_used, vo->used, n);
+    if (vo->cfg.ransac) {
+        /* The prediction is wrong: re-find the pose from the images. RANSAC's outliers get
+         * w = 0 (so used = 0, and their landmarks are dropped); the update is redone on its
+         * inliers from the prediction with the pose covariance widened by d d^T, d the gap to
+         * the re-found pose (so the velocity keeps its correlation with the pose); if that
+         * still uses fewer than RANSAC found, the filter restarts at the re-found pose. */
+        rp_real p[6], cov[36], d[6];
+        uint32_t n_inl = 0;
+        if (robust_pose(vo, n, p, cov, &n_inl) == RP_OK && n_inl > first_n) {
+            vo->ekf = vo->ekf_pred;
+            for (int i = 0; i < 6; ++i) {
+                d[i] = p[i] - vo->ekf_pred.x[i];
+            }
+            for (int i = 0; i < 6; ++i) {
+                for (int j = 0; j < 6; ++j) {
+                    vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
+                }
+            }
+            rp_ekf_info_t retry;
+            vo->n_retried++;
+            vo->n_refound++;
+            if (rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, &retry) == RP_OK &&
+                2u * retry.n_used >= n_inl) {
+                *info = retry;
+                info->n_gated = (uint16_t)(info->n_gated + n - n_inl); /* RANSAC's outliers */
+                return RP_OK;
+            }
+            if (rp_vo_ekf_from_pose(&vo->ekf, &vo->cfg.ekf, p, cov, vo->prev_p, dt) == RP_OK) {
+                memcpy(vo->used, vo->inl, n);
+                memset(info, 0, sizeof(*info));
+                info->n_used = (uint16_t)n_inl;
+                info->n_gated = (uint16_t)(n - n_inl);
+                return RP_OK;
+            }
+            vo->n_retried--;
+            vo->n_refound--;
+        }
+        for (uint32_t i = 0; i < n; ++i) {
+            vo->obs[i].w = RP_C(1.0);
+        }
+        vo->ekf = first;
+        memcpy(vo->used, first_used, n);
+        *info = first_info;
+        if (st != RP_OK) {
+            return st;
+        }
     }
     rp_lowe_params_t lp = rp_lowe_default_params();
     rp_real p[6], d[6];
@@ -328,11 +530,6 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
     if ((sl != RP_OK && sl != RP_E_NO_CONVERGE) || !rp_all_finite(p, 6)) {
         return st;
     }
-    /* keep the first update's result, to restore it if the retry is no better */
-    const rp_ekf_t first = vo->ekf;
-    const rp_ekf_info_t first_info = *info;
-    uint8_t first_used[sizeof vo->used];
-    memcpy(first_used, vo->used, n);
     vo->ekf = vo->ekf_pred;
     for (int i = 0; i < 6; ++i) {
         d[i] = p[i] - vo->ekf_pred.x[i];
@@ -399,6 +596,9 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     uint16_t n_gated = 0;
     if (vo->frame == 1) {
         st = start_with_lowe(vo, n, dt);
+        for (uint32_t i = 0; st == RP_OK && vo->cfg.ransac && i < n; ++i) {
+            n_gated = (uint16_t)(n_gated + !vo->used[i]); /* RANSAC's outliers are dropped */
+        }
     } else {
         rp_ekf_info_t info;
         memset(&info, 0, sizeof(info));
@@ -414,13 +614,15 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     }
     if (st == RP_OK) {
         flags |= RP_EST_TRACKING;
-        /* A landmark whose every observation was gated is an outlier track: drop it. */
+        /* A landmark whose every observation was gated is an outlier track: drop it (with
+         * cfg.quarantine > 0: once it has been so that many frames in a row). */
         for (uint32_t i = 0; i < n; ++i) {
             if (vo->used[i]) {
                 est->n_used[vo->obs[i].cam]++;
             }
         }
-        (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->used, n);
+        quarantine(vo, n);
+        (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->keep, n);
         if (vo->cfg.refine_structure) {
             /* step 4: each used observation updates its landmark at the new pose */
             (void)rp_lmtab_refine(&vo->lm, vo->rig, vo->ekf.x, vo->obs, vo->obs_id, vo->used, n,

@@ -1,0 +1,309 @@
+/*
+ * rp_ekf1pt.c - 1-point RANSAC around the pose EKF's update (Civera et al. 2010, algorithm 1).
+ * See rp_ekf1pt.h for the method; the steps below are its numbers.
+ */
+#include <string.h>
+
+#include "priv/rp_math.h"
+#include "rigpose/rp_ekf1pt.h"
+
+#define NP 6
+#define RESCUE_ROUNDS 3 /* rescue rounds at most; measured: the 40 % outlier test needs 2 */
+
+rp_ekf1pt_params_t rp_ekf1pt_default_params(void)
+{
+    rp_ekf1pt_params_t p;
+    p.confidence = RP_C(0.99);
+    p.min_hyp = 2;
+    p.max_hyp = 200;
+    return p;
+}
+
+/* ---- generator: splitmix64 to seed, xorshift64* to draw (as rp_ransac.c) ------------------ */
+
+rp_status_t rp_ekf1pt_seed(rp_ekf1pt_t *s, uint64_t seed)
+{
+    if (s == NULL) {
+        return RP_E_ARG;
+    }
+    uint64_t z = seed + 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    s->rng = z != 0 ? z : 0x2545F4914F6CDD1Dull;
+    return RP_OK;
+}
+
+static uint32_t rng_below(uint64_t *s, uint32_t m)
+{
+    uint64_t x = *s;
+    x ^= x >> 12;
+    x ^= x << 25;
+    x ^= x >> 27;
+    *s = x;
+    const uint32_t r = (uint32_t)((x * 0x2545F4914F6CDD1Dull) >> 32);
+    return (uint32_t)(((uint64_t)r * (uint64_t)m) >> 32);
+}
+
+/* ---- helpers ------------------------------------------------------------------------------ */
+
+/* S = J C J^T + s2w I (J 2x6, C 6x6 row-major) and CJt = C J^T (6x2). */
+static void innov_cov(const rp_real J[12], const rp_real C[36], rp_real s2w, rp_real S[4],
+                      rp_real CJt[12])
+{
+    for (int i = 0; i < NP; ++i) {
+        for (int a = 0; a < 2; ++a) {
+            rp_real acc = RP_C(0.0);
+            for (int k = 0; k < NP; ++k) {
+                acc += C[i * NP + k] * J[a * NP + k];
+            }
+            CJt[i * 2 + a] = acc;
+        }
+    }
+    for (int a = 0; a < 2; ++a) {
+        for (int b = 0; b < 2; ++b) {
+            rp_real acc = RP_C(0.0);
+            for (int k = 0; k < NP; ++k) {
+                acc += J[a * NP + k] * CJt[k * 2 + b];
+            }
+            S[a * 2 + b] = acc + (a == b ? s2w : RP_C(0.0));
+        }
+    }
+}
+
+/* S^-1 of a 2x2; 0 if S is not positive definite. */
+static int inv2(const rp_real S[4], rp_real Si[4])
+{
+    const rp_real det = S[0] * S[3] - S[1] * S[2];
+    if (!(det > RP_C(0.0)) || !(S[0] > RP_C(0.0))) {
+        return 0;
+    }
+    Si[0] = S[3] / det;
+    Si[1] = -S[1] / det;
+    Si[2] = -S[2] / det;
+    Si[3] = S[0] / det;
+    return 1;
+}
+
+static void pose_cov(const rp_ekf_t *ekf, rp_real C[36])
+{
+    for (int i = 0; i < NP; ++i) {
+        for (int j = 0; j < NP; ++j) {
+            C[i * NP + j] = ekf->P[i * RP_EKF_N + j];
+        }
+    }
+}
+
+static int obs_ok(const rp_rig_t *rig, const rp_obs_t *o)
+{
+    return rp_finite(o->w) && o->w > RP_C(0.0) && rp_all_finite(o->uv, 2) &&
+           rp_all_finite(o->M, 3) && o->cam < rig->n_cams;
+}
+
+/* Support of pose p: cand[k] = 1 for usable k with w |z - h(p)|^2 <= thr2; returns the count,
+ * or 0 as soon as it cannot exceed `beat` (n_ok usable in all). */
+static uint32_t support(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
+                        const rp_real p[6], rp_real thr2, uint32_t n_ok, uint32_t beat)
+{
+    rp_pose_lin_t pl;
+    memset(s->cand, 0, n);
+    if (rp_pose_lin_set(&pl, p) != RP_OK) {
+        return 0;
+    }
+    uint32_t c = 0, left = n_ok;
+    for (uint32_t k = 0; k < n; ++k) {
+        rp_real uv[2];
+        if (!s->ok[k]) {
+            continue;
+        }
+        if (c + left <= beat) {
+            return 0;
+        }
+        left--;
+        if (rp_rig_project(rig, obs[k].cam, &pl, obs[k].M, uv, NULL, NULL) != RP_OK) {
+            continue;
+        }
+        const rp_real du = obs[k].uv[0] - uv[0], dv = obs[k].uv[1] - uv[1];
+        if (obs[k].w * (du * du + dv * dv) <= thr2) {
+            s->cand[k] = 1;
+            c++;
+        }
+    }
+    return c;
+}
+
+/* Draws needed for confidence when a fraction eps of the observations are inliers. */
+static uint32_t draws_needed(const rp_ekf1pt_params_t *prm, rp_real eps)
+{
+    if (!(eps > RP_C(0.0))) {
+        return prm->max_hyp;
+    }
+    if (!(eps < RP_C(1.0))) {
+        return prm->min_hyp;
+    }
+    const rp_real nf = rp_log(RP_C(1.0) - prm->confidence) / rp_log(RP_C(1.0) - eps) + RP_C(1.0);
+    if (!(nf < (rp_real)prm->max_hyp)) {
+        return prm->max_hyp;
+    }
+    const uint32_t ni = (uint32_t)nf;
+    return ni > prm->min_hyp ? ni : prm->min_hyp;
+}
+
+/* ---- the update --------------------------------------------------------------------------- */
+
+rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
+                             const rp_obs_t *obs, uint32_t n, const rp_ekf1pt_params_t *prm,
+                             uint8_t *used, rp_ekf1pt_info_t *info)
+{
+    rp_ekf1pt_info_t dummy;
+    if (!info) {
+        info = &dummy;
+    }
+    memset(info, 0, sizeof(*info));
+    const rp_ekf1pt_params_t def = rp_ekf1pt_default_params();
+    if (!prm) {
+        prm = &def;
+    }
+    if (!s || !ekf || !rig || (n > 0 && !obs) || n > RP_EKF1PT_MAX_OBS ||
+        !(prm->confidence > RP_C(0.0) && prm->confidence < RP_C(1.0)) || prm->max_hyp < 1 ||
+        prm->min_hyp > prm->max_hyp) {
+        return RP_E_ARG;
+    }
+    if (used) {
+        memset(used, 0, n);
+    }
+    const rp_real s2 = ekf->prm.sigma_px * ekf->prm.sigma_px;
+    const rp_real gate = ekf->prm.gate_chi2 > RP_C(0.0) ? ekf->prm.gate_chi2 : RP_C(13.8);
+    rp_real C[36], p0[NP];
+    pose_cov(ekf, C);
+    memcpy(p0, ekf->x, sizeof(p0));
+    rp_pose_lin_t pl0;
+    if (!rp_all_finite(p0, NP) || !rp_all_finite(C, 36) || rp_pose_lin_set(&pl0, p0) != RP_OK) {
+        return rp_ekf_update(ekf, rig, obs, n, used, &info->ekf); /* its fault handling */
+    }
+
+    /* Step 1: usable observations, then hypotheses from single ones. */
+    uint32_t n_ok = 0;
+    for (uint32_t k = 0; k < n; ++k) {
+        rp_real uv[2];
+        s->ok[k] = (uint8_t)(obs_ok(rig, &obs[k]) &&
+                             rp_rig_project(rig, obs[k].cam, &pl0, obs[k].M, uv, NULL, NULL) ==
+                                 RP_OK);
+        n_ok += s->ok[k];
+    }
+    info->n_usable = (uint16_t)n_ok;
+    if (n_ok < ekf->prm.min_features) {
+        return rp_ekf_update(ekf, rig, obs, n, used, &info->ekf);
+    }
+    uint32_t best = 0, need = prm->max_hyp, h = 0;
+    memset(s->best, 0, n);
+    for (; h < need; ++h) {
+        uint32_t pick = rng_below(&s->rng, n_ok), i = 0;
+        for (uint32_t k = 0; k < n; ++k) { /* the pick-th usable observation */
+            if (s->ok[k] && pick-- == 0) {
+                i = k;
+                break;
+            }
+        }
+        rp_real uv[2], J[12], S[4], Si[4], CJt[12];
+        if (rp_rig_project(rig, obs[i].cam, &pl0, obs[i].M, uv, J, NULL) != RP_OK) {
+            continue;
+        }
+        innov_cov(J, C, s2 / obs[i].w, S, CJt);
+        if (!inv2(S, Si)) {
+            continue;
+        }
+        const rp_real r[2] = {obs[i].uv[0] - uv[0], obs[i].uv[1] - uv[1]};
+        const rp_real g[2] = {Si[0] * r[0] + Si[1] * r[1], Si[2] * r[0] + Si[3] * r[1]};
+        rp_real p[NP];
+        for (int a = 0; a < NP; ++a) {
+            p[a] = p0[a] + CJt[a * 2] * g[0] + CJt[a * 2 + 1] * g[1];
+        }
+        const uint32_t c = support(s, rig, obs, n, p, gate * s2, n_ok, best);
+        if (c > best) {
+            best = c;
+            memcpy(s->best, s->cand, n);
+            need = draws_needed(prm, (rp_real)best / (rp_real)n_ok);
+        }
+    }
+    info->n_hyp = (uint16_t)h;
+    info->n_low = (uint16_t)best;
+
+    /* Step 2: the low-innovation inliers update the filter. */
+    for (uint32_t k = 0; k < n; ++k) {
+        s->sel[k] = obs[k];
+        if (!s->best[k]) {
+            s->sel[k].w = RP_C(0.0);
+        }
+    }
+    rp_status_t st = rp_ekf_update(ekf, rig, s->sel, n, s->cand, &info->ekf);
+    if (used) {
+        memcpy(used, s->cand, n);
+    }
+    if (st != RP_OK) {
+        return st;
+    }
+
+    /* Step 3: rescue the high-innovation inliers against the posterior. The support of a
+     * one-observation hypothesis can be a small part of the inliers when the prior is wide
+     * (the other pose directions stay at the prior's error), so the rescue is repeated, each
+     * round against the latest posterior, until it adds none (RESCUE_ROUNDS at most). */
+    uint16_t n_used2 = 0;
+    for (int round = 0; round < RESCUE_ROUNDS && info->ekf.n_used + n_used2 < n_ok; ++round) {
+        rp_real Cp[36], pp[NP];
+        pose_cov(ekf, Cp);
+        memcpy(pp, ekf->x, sizeof(pp));
+        rp_pose_lin_t pl;
+        uint32_t n_res = 0;
+        if (rp_pose_lin_set(&pl, pp) != RP_OK) {
+            break;
+        }
+        for (uint32_t k = 0; k < n; ++k) {
+            s->sel[k] = obs[k];
+            s->sel[k].w = RP_C(0.0);
+            rp_real uv[2], J[12], S[4], Si[4], CJt[12];
+            if (!s->ok[k] || s->cand[k] ||
+                rp_rig_project(rig, obs[k].cam, &pl, obs[k].M, uv, J, NULL) != RP_OK) {
+                continue;
+            }
+            innov_cov(J, Cp, s2 / obs[k].w, S, CJt);
+            if (!inv2(S, Si)) {
+                continue;
+            }
+            const rp_real r[2] = {obs[k].uv[0] - uv[0], obs[k].uv[1] - uv[1]};
+            const rp_real d2 = r[0] * (Si[0] * r[0] + Si[1] * r[1]) +
+                               r[1] * (Si[2] * r[0] + Si[3] * r[1]);
+            if (d2 <= gate) {
+                s->sel[k].w = obs[k].w;
+                n_res++;
+            }
+        }
+        if (n_res == 0) {
+            break;
+        }
+        /* A partial update: any number of rescued observations is information. */
+        const uint16_t min_f = ekf->prm.min_features;
+        const rp_ekf_t before = *ekf;
+        rp_ekf_info_t i2;
+        ekf->prm.min_features = 1;
+        const rp_status_t s2st = rp_ekf_update(ekf, rig, s->sel, n, s->used2, &i2);
+        ekf->prm.min_features = min_f;
+        if (s2st != RP_OK || i2.n_used == 0) {
+            *ekf = before; /* keep the posterior before this round */
+            break;
+        }
+        n_used2 = (uint16_t)(n_used2 + i2.n_used);
+        for (uint32_t k = 0; k < n; ++k) {
+            s->cand[k] = (uint8_t)(s->cand[k] | s->used2[k]);
+        }
+    }
+    if (used) {
+        memcpy(used, s->cand, n);
+    }
+    info->n_rescued = n_used2;
+    info->ekf.n_used = (uint16_t)(info->ekf.n_used + n_used2);
+    info->ekf.n_bad = (uint16_t)(n - n_ok);
+    info->ekf.n_gated = (uint16_t)(n_ok - info->ekf.n_used);
+    info->ekf.n_outside = info->ekf.n_gated; /* left out of the consensus */
+    return RP_OK;
+}

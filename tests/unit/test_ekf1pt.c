@@ -1,0 +1,206 @@
+/*
+ * test_ekf1pt.c - 1-point RANSAC around the pose EKF's update: gross outliers left out,
+ * high-innovation inliers rescued, the same input giving the same output, bad input refused.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rp_test.h"
+#include "rigpose/rp_ekf.h"
+#include "rigpose/rp_ekf1pt.h"
+#include "rp_sim.h"
+
+#define N RP_EKF_N
+#define CAP (RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM)
+
+typedef struct {
+    rp_sim_run_t sr;
+    rp_frameset_t fs;
+    rp_obs_t obs[CAP];
+    uint8_t outlier[CAP];
+    uint8_t used[CAP];
+    rp_ekf1pt_t op;
+    uint32_t n;
+} fixture_t;
+
+static uint64_t rng = 1;
+static double u01(void)
+{
+    rng ^= rng >> 12;
+    rng ^= rng << 25;
+    rng ^= rng >> 27;
+    return (double)((rng * 0x2545F4914F6CDD1Dull) >> 11) / 9007199254740992.0;
+}
+
+/* Frame 10 of run 0 (0.5 px noise), every camera, true structure; a share frac of the
+ * observations replaced by uniform pixels over the 640 x 480 image. */
+static fixture_t *fixture(double frac)
+{
+    fixture_t *fx = calloc(1, sizeof(*fx));
+    assert_non_null(fx);
+    rp_sim_cfg_t cfg;
+    rp_sim_default_cfg(&cfg);
+    cfg.n_frames = 12;
+    assert_int_equal(rp_sim_run_init(&fx->sr, &cfg, 7, 0), 0);
+    rp_sim_frame(&fx->sr, 10, &fx->fs);
+    rng = 0x9E3779B97F4A7C15ull;
+    for (uint8_t k = 0; k < fx->sr.rig.n_cams; ++k) {
+        for (uint16_t i = 0; i < fx->fs.n[k] && fx->n < CAP; ++i) {
+            const rp_feat_t *f = &fx->fs.f[k][i];
+            rp_obs_t *o = &fx->obs[fx->n];
+            o->uv[0] = f->uv[0];
+            o->uv[1] = f->uv[1];
+            for (int a = 0; a < 3; ++a) o->M[a] = (rp_real)fx->sr.points[3 * f->id + (uint32_t)a];
+            o->w = RP_C(1.0);
+            o->cam = k;
+            if (u01() < frac) {
+                o->uv[0] = (rp_real)(640.0 * u01());
+                o->uv[1] = (rp_real)(480.0 * u01());
+                fx->outlier[fx->n] = 1;
+            }
+            fx->n++;
+        }
+    }
+    assert_ok(rp_ekf1pt_seed(&fx->op, 1));
+    return fx;
+}
+
+/* The filter at the truth of frame 10 moved by off (m, rad), pose sigma `ps`. */
+static void make_ekf(const fixture_t *fx, const double off[6], rp_real ps, rp_ekf_t *ekf)
+{
+    rp_ekf_params_t prm = rp_ekf_default_params();
+    rp_real x0[N] = {0}, P0[N];
+    for (int i = 0; i < 6; ++i) {
+        x0[i] = (rp_real)(fx->sr.truth[6u * 10 + (unsigned)i] + off[i]);
+        P0[i] = ps * ps;
+        P0[6 + i] = RP_C(1.0);
+    }
+    assert_ok(rp_ekf_init(ekf, &prm, x0, P0));
+}
+
+static double pose_err(const fixture_t *fx, const rp_ekf_t *ekf)
+{
+    double e = 0.0;
+    for (int i = 0; i < 6; ++i) e = fmax(e, fabs((double)ekf->x[i] - fx->sr.truth[60u + (unsigned)i]));
+    return e;
+}
+
+/* 40 % gross outliers and a prior off by 20 mm / 20 mrad (sigma 30 mm): 1-point RANSAC uses
+ * (almost) only inliers, all of them, and lands on the truth; the plain update's figure is
+ * printed beside it. */
+static void test_gross_outliers_are_left_out(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.4);
+    static const double off[6] = {0.02, -0.02, 0.02, 0.02, -0.02, 0.02};
+    rp_ekf_t plain, ekf;
+    make_ekf(fx, off, RP_C(0.03), &plain);
+    make_ekf(fx, off, RP_C(0.03), &ekf);
+    rp_ekf_info_t pi;
+    (void)rp_ekf_update(&plain, &fx->sr.rig, fx->obs, fx->n, NULL, &pi);
+    rp_ekf1pt_info_t info;
+    assert_ok(rp_ekf1pt_update(&fx->op, &ekf, &fx->sr.rig, fx->obs, fx->n, NULL, fx->used, &info));
+    uint32_t in_used = 0, out_used = 0, inliers = 0;
+    for (uint32_t i = 0; i < fx->n; ++i) {
+        inliers += !fx->outlier[i];
+        in_used += fx->used[i] && !fx->outlier[i];
+        out_used += fx->used[i] && fx->outlier[i];
+    }
+    print_message("1-point RANSAC: %u hypotheses, %u low + %u rescued, inliers used %u of %u, "
+                  "outliers used %u; pose error %.2e (plain update %.2e)\n",
+                  info.n_hyp, info.n_low, info.n_rescued, in_used, inliers, out_used,
+                  pose_err(fx, &ekf), pose_err(fx, &plain));
+    assert_true(pose_err(fx, &ekf) < RP_TOL(2e-4, 1e-3));
+    assert_true(in_used >= 95 * inliers / 100);
+    assert_true(out_used <= fx->n / 100); /* a uniform pixel can land within the gate */
+    assert_true(info.n_hyp >= 8 && info.n_hyp <= 200);
+    assert_int_equal(info.ekf.n_used, in_used + out_used);
+    rp_sim_run_free(&fx->sr);
+    free(fx);
+}
+
+/* A prior off by 25 mm along x with sigma 30 mm: the hypotheses' support misses the inliers
+ * that a single observation's partial update leaves farthest off (the low-innovation set is a
+ * part), and the rescue against the first posterior brings them back. */
+static void test_high_innovation_inliers_are_rescued(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.3);
+    static const double off[6] = {0.025, 0.0, 0.0, 0.0, 0.02, 0.0};
+    rp_ekf_t ekf;
+    make_ekf(fx, off, RP_C(0.03), &ekf);
+    rp_ekf1pt_info_t info;
+    assert_ok(rp_ekf1pt_update(&fx->op, &ekf, &fx->sr.rig, fx->obs, fx->n, NULL, fx->used, &info));
+    uint32_t inliers = 0, in_used = 0;
+    for (uint32_t i = 0; i < fx->n; ++i) {
+        inliers += !fx->outlier[i];
+        in_used += fx->used[i] && !fx->outlier[i];
+    }
+    print_message("low %u, rescued %u, inliers used %u of %u, pose error %.2e\n", info.n_low,
+                  info.n_rescued, in_used, inliers, pose_err(fx, &ekf));
+    assert_true(info.n_rescued > 0);
+    assert_true(info.n_low < inliers);
+    assert_true(in_used >= 95 * inliers / 100);
+    assert_true(pose_err(fx, &ekf) < RP_TOL(2e-4, 1e-3));
+    rp_sim_run_free(&fx->sr);
+    free(fx);
+}
+
+static void test_same_seed_same_output(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.3);
+    static const double off[6] = {0.005, 0.0, 0.0, 0.0, 0.005, 0.0};
+    rp_ekf_t a, b;
+    make_ekf(fx, off, RP_C(0.01), &a);
+    make_ekf(fx, off, RP_C(0.01), &b);
+    assert_ok(rp_ekf1pt_update(&fx->op, &a, &fx->sr.rig, fx->obs, fx->n, NULL, NULL, NULL));
+    assert_ok(rp_ekf1pt_seed(&fx->op, 1));
+    assert_ok(rp_ekf1pt_update(&fx->op, &b, &fx->sr.rig, fx->obs, fx->n, NULL, NULL, NULL));
+    assert_memory_equal(a.x, b.x, sizeof(a.x));
+    assert_memory_equal(a.P, b.P, sizeof(a.P));
+    rp_sim_run_free(&fx->sr);
+    free(fx);
+}
+
+static void test_bad_input_is_refused(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0);
+    static const double off[6] = {0};
+    rp_ekf_t ekf, before;
+    make_ekf(fx, off, RP_C(0.01), &ekf);
+    before = ekf;
+    rp_ekf1pt_params_t prm = rp_ekf1pt_default_params();
+    const rp_rig_t *rig = &fx->sr.rig;
+    assert_status(rp_ekf1pt_update(NULL, &ekf, rig, fx->obs, fx->n, NULL, NULL, NULL), RP_E_ARG);
+    assert_status(rp_ekf1pt_update(&fx->op, NULL, rig, fx->obs, fx->n, NULL, NULL, NULL), RP_E_ARG);
+    assert_status(rp_ekf1pt_update(&fx->op, &ekf, NULL, fx->obs, fx->n, NULL, NULL, NULL), RP_E_ARG);
+    assert_status(rp_ekf1pt_update(&fx->op, &ekf, rig, NULL, fx->n, NULL, NULL, NULL), RP_E_ARG);
+    assert_status(rp_ekf1pt_update(&fx->op, &ekf, rig, fx->obs, CAP + 1, NULL, NULL, NULL),
+                  RP_E_ARG);
+    prm.confidence = RP_C(1.0);
+    assert_status(rp_ekf1pt_update(&fx->op, &ekf, rig, fx->obs, fx->n, &prm, NULL, NULL), RP_E_ARG);
+    prm = rp_ekf1pt_default_params();
+    prm.min_hyp = 300;
+    assert_status(rp_ekf1pt_update(&fx->op, &ekf, rig, fx->obs, fx->n, &prm, NULL, NULL), RP_E_ARG);
+    assert_memory_equal(ekf.x, before.x, sizeof(ekf.x));
+    assert_status(rp_ekf1pt_seed(NULL, 1), RP_E_ARG);
+    /* too few observations: rp_ekf_update's answer, the state left as predicted */
+    assert_status(rp_ekf1pt_update(&fx->op, &ekf, rig, fx->obs, 3, NULL, NULL, NULL), RP_E_TOO_FEW);
+    assert_memory_equal(ekf.x, before.x, sizeof(ekf.x));
+    rp_sim_run_free(&fx->sr);
+    free(fx);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_gross_outliers_are_left_out),
+        cmocka_unit_test(test_high_innovation_inliers_are_rescued),
+        cmocka_unit_test(test_same_seed_same_output),
+        cmocka_unit_test(test_bad_input_is_refused),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
