@@ -60,7 +60,8 @@ VDEF_float-c      := -DRP_REAL_IS_FLOAT=1 -DRP_LINALG_EIGEN=0
         check-nomalloc run-tests FORCE
 all: tools
 
-PY := $(or $(RIGPOSE_VENV),$(CURDIR)/.venv)/bin/python
+# The Python of the PyPI packages (.venv/, or $RIGPOSE_VENV); exported: the test scripts use $PY.
+export PY := $(or $(RIGPOSE_VENV),$(CURDIR)/.venv)/bin/python
 
 # Packages: scripts/install-deps.sh runs only when its stamp is missing or older than the
 # script (a clean clone, `make clean`, a changed package list), never on a no-op `make`. The
