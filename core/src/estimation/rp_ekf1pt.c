@@ -4,6 +4,7 @@
  */
 #include <string.h>
 
+#include "priv/rp_rng.h"
 #include "priv/rp_math.h"
 #include "rigpose/rp_ekf1pt.h"
 
@@ -19,30 +20,15 @@ rp_ekf1pt_params_t rp_ekf1pt_default_params(void)
     return p;
 }
 
-/* ---- generator: splitmix64 to seed, xorshift64* to draw (as rp_ransac.c) ------------------ */
+/* ---- generator (priv/rp_rng.h) ------------------------------------------------------------ */
 
 rp_status_t rp_ekf1pt_seed(rp_ekf1pt_t *s, uint64_t seed)
 {
     if (s == NULL) {
         return RP_E_ARG;
     }
-    uint64_t z = seed + 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    s->rng = z != 0 ? z : 0x2545F4914F6CDD1Dull;
+    s->rng = rp_rng_state(seed);
     return RP_OK;
-}
-
-static uint32_t rng_below(uint64_t *s, uint32_t m)
-{
-    uint64_t x = *s;
-    x ^= x >> 12;
-    x ^= x << 25;
-    x ^= x >> 27;
-    *s = x;
-    const uint32_t r = (uint32_t)((x * 0x2545F4914F6CDD1Dull) >> 32);
-    return (uint32_t)(((uint64_t)r * (uint64_t)m) >> 32);
 }
 
 /* ---- helpers ------------------------------------------------------------------------------ */
@@ -198,7 +184,7 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
     uint32_t best = 0, need = prm->max_hyp, h = 0;
     memset(s->best, 0, n);
     for (; h < need; ++h) {
-        uint32_t pick = rng_below(&s->rng, n_ok), i = 0;
+        uint32_t pick = rp_rng_below(&s->rng, n_ok), i = 0;
         for (uint32_t k = 0; k < n; ++k) { /* the pick-th usable observation */
             if (s->ok[k] && pick-- == 0) {
                 i = k;

@@ -3,6 +3,7 @@
  * camera through eq. (2)), then Lowe's method on the consensus. The algorithm, its equations and
  * its choices are in rp_ransac.h.
  */
+#include "priv/rp_rng.h"
 #include "rigpose/rp_ransac.h"
 
 #include <stddef.h>
@@ -33,35 +34,15 @@ rp_ransac_params_t rp_ransac_default_params(void)
     return prm;
 }
 
-/* ---- generator: splitmix64 to seed, xorshift64* to draw ----------------------------------- */
+/* ---- generator (priv/rp_rng.h) ------------------------------------------------------------ */
 
 rp_status_t rp_ransac_seed(rp_ransac_t *rs, uint64_t seed)
 {
     if (rs == NULL) {
         return RP_E_ARG;
     }
-    uint64_t z = seed + 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    rs->rng = z != 0 ? z : 0x2545F4914F6CDD1Dull;
+    rs->rng = rp_rng_state(seed);
     return RP_OK;
-}
-
-static uint32_t rng_next32(uint64_t *s)
-{
-    uint64_t x = *s;
-    x ^= x >> 12;
-    x ^= x << 25;
-    x ^= x >> 27;
-    *s = x;
-    return (uint32_t)((x * 0x2545F4914F6CDD1Dull) >> 32);
-}
-
-/* Uniform in [0, m), m >= 1 (multiply-shift; bias below 2^-32 * m). */
-static uint32_t rng_below(uint64_t *s, uint32_t m)
-{
-    return (uint32_t)(((uint64_t)rng_next32(s) * (uint64_t)m) >> 32);
 }
 
 /* ---- scoring ------------------------------------------------------------------------------ */
@@ -275,7 +256,7 @@ static rp_status_t prepare(rp_ransac_t *rs, const rp_rig_t *rig, const rp_obs_t 
 static void draw_sample(rp_ransac_t *rs, const rp_rig_t *rig, uint32_t n_samp, uint32_t idx[3])
 {
     /* position among the sampleable observations -> camera */
-    uint32_t r = rng_below(&rs->rng, n_samp);
+    uint32_t r = rp_rng_below(&rs->rng, n_samp);
     uint8_t c = 0;
     for (c = 0; c < rig->n_cams; ++c) {
         const uint32_t nc = rs->cam_start[c + 1] - rs->cam_start[c];
@@ -289,9 +270,9 @@ static void draw_sample(rp_ransac_t *rs, const rp_rig_t *rig, uint32_t n_samp, u
     }
     const uint32_t base = rs->cam_start[c], nc = rs->cam_start[c + 1] - base;
     const uint32_t a = r;
-    uint32_t b = rng_below(&rs->rng, nc - 1);
+    uint32_t b = rp_rng_below(&rs->rng, nc - 1);
     b += b >= a;
-    uint32_t k = rng_below(&rs->rng, nc - 2);
+    uint32_t k = rp_rng_below(&rs->rng, nc - 2);
     /* k-th of the indices other than a and b, in increasing order */
     const uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
     k += k >= lo;
