@@ -4,7 +4,8 @@
 #   make $(REL)/rigpose-realdata   the program
 #   make test                      test_realdata_conv (conversions, scoring, loaders) and
 #                                  test_realdata.sh: 20 frames of each sequence within the
-#                                  targets (both skip the data's part if it is absent)
+#                                  targets (both skip the data's part if it is absent),
+#                                  both built with ASan + UBSan ($(BUILD)/realdata-san)
 #   make bench                     $(BUILD)/bench/realdata.json, every clip with the core's
 #                                  default settings (no --config): kitti00_ate_percent,
 #                                  euroc_mh01_ate_m, kitti_raw0005_* ... (QUICK=1: 40 frames
@@ -60,9 +61,29 @@ $(RD_TEST): host_tools/research/realdata/test_realdata_conv.cpp $(RD_LIB_SRC) $(
             $(RD_DIR)/librigpose_core.a | deps
 	$(CXX) $(RD_CXXFLAGS) $< $(RD_LIB_SRC) $(RD_DIR)/librigpose_core.a -o $@ $(RD_LIBS)
 
-HOST_EXTRA_TESTS += $(RD_TEST) host_tools/research/realdata/test_realdata.sh
-test: $(RD_BIN) $(RD_TEST)
-export RP_REALDATA_BIN = $(RD_BIN)
+# make test runs the tool and its unit test under ASan + UBSan (the paths that read real images,
+# calibration and ground truth): a core of the same limits built with the sanitizers, in
+# $(BUILD)/realdata-san (OpenCV itself is not instrumented). The bench uses the release build.
+RD_SAN_DIR := $(BUILD)/realdata-san
+RD_SAN_FLAGS := -O1 -g $(SAN) $(RD_DEFS)
+$(eval $(call CORE_LIB,realdata-san,$(RD_SAN_DIR),$(CC),$(CXX),$(RD_SAN_FLAGS),ar))
+RD_SAN_CXXFLAGS = $(subst -O2 -g -DNDEBUG,$(RD_SAN_FLAGS),$(RD_CXXFLAGS))
+RD_SAN_BIN := $(RD_SAN_DIR)/rigpose-realdata
+RD_SAN_TEST := $(RD_SAN_DIR)/test_realdata_conv
+$(RD_SAN_DIR)/rp_config.o: platform/src/rp_config.c platform/include/rigpose/rp_config.h $(RD_HDR_CORE) | deps
+	@mkdir -p $(@D)
+	$(CC) $(CSTD) $(CORE_WARN) -Wno-format-truncation -D_DEFAULT_SOURCE -Iplatform/include $(INC) \
+	    $(RD_SAN_FLAGS) -c $< -o $@
+$(RD_SAN_BIN): $(RD_SRC) $(RD_HDR) $(RD_SAN_DIR)/rp_config.o $(RD_SAN_DIR)/librigpose_core.a | deps
+	$(CXX) $(RD_SAN_CXXFLAGS) $(RD_SRC) $(RD_SAN_DIR)/rp_config.o $(RD_SAN_DIR)/librigpose_core.a \
+	    -o $@ $(SAN) $(RD_LIBS)
+$(RD_SAN_TEST): host_tools/research/realdata/test_realdata_conv.cpp $(RD_LIB_SRC) $(RD_HDR) \
+                $(RD_SAN_DIR)/librigpose_core.a | deps
+	$(CXX) $(RD_SAN_CXXFLAGS) $< $(RD_LIB_SRC) $(RD_SAN_DIR)/librigpose_core.a -o $@ $(SAN) $(RD_LIBS)
+
+HOST_EXTRA_TESTS += $(RD_SAN_TEST) host_tools/research/realdata/test_realdata.sh
+test: $(RD_SAN_BIN) $(RD_SAN_TEST)
+export RP_REALDATA_BIN = $(RD_SAN_BIN)
 
 RD_BENCH_KITTI ?= $(if $(filter 1,$(QUICK)),40,100)
 RD_BENCH_EUROC ?= $(if $(filter 1,$(QUICK)),40,150)
