@@ -226,6 +226,23 @@ void rp_sim_make_rig(const rp_sim_cfg_t *cfg, rp_rig_t *rig)
     }
 }
 
+/* Frame j's truth: R_j, and the pose [d, angles] with the angles what the core's own extraction
+ * makes of R_j (rp_rot_to_angles: R_j is a rotation by construction, its status is not needed). */
+static void store_truth(rp_sim_run_t *sr, uint32_t j, const double R[9], const double d[3])
+{
+    double *t = &sr->truth[6u * j];
+    memcpy(&sr->truth_R[9u * j], R, 9 * sizeof R[0]);
+    memcpy(t, d, 3 * sizeof d[0]);
+    rp_real Rr[9], abg[3];
+    for (int i = 0; i < 9; ++i) {
+        Rr[i] = (rp_real)R[i];
+    }
+    (void)rp_rot_to_angles(Rr, abg);
+    for (int i = 0; i < 3; ++i) {
+        t[3 + i] = (double)abg[i];
+    }
+}
+
 /* ---- a run: points and trajectory ---------------------------------------------------------- */
 
 int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, uint32_t run)
@@ -273,17 +290,9 @@ int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, ui
             }
         }
         for (uint32_t j = 0; j < cfg->n_frames; ++j) {
-            double R[9], *t = &sr->truth[6u * j];
-            rp_sim_turn_pose(sr, (double)j * cfg->frame_dt, t, R);
-            memcpy(&sr->truth_R[9u * j], R, sizeof R);
-            rp_real Rr[9], abg[3];
-            for (int i = 0; i < 9; ++i) {
-                Rr[i] = (rp_real)R[i];
-            }
-            (void)rp_rot_to_angles(Rr, abg);
-            for (int i = 0; i < 3; ++i) {
-                t[3 + i] = (double)abg[i];
-            }
+            double R[9], d[3];
+            rp_sim_turn_pose(sr, (double)j * cfg->frame_dt, d, R);
+            store_truth(sr, j, R, d);
         }
         return 0;
     }
@@ -309,18 +318,7 @@ int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, ui
                 d[i] += dt[i];
             }
         }
-        double *t = &sr->truth[6u * j];
-        memcpy(&sr->truth_R[9u * j], R, sizeof R);
-        memcpy(t, d, sizeof d);
-        /* The truth angles are what the core's own extraction makes of R_j. */
-        rp_real Rr[9], abg[3];
-        for (int i = 0; i < 9; ++i) {
-            Rr[i] = (rp_real)R[i];
-        }
-        (void)rp_rot_to_angles(Rr, abg);
-        for (int i = 0; i < 3; ++i) {
-            t[3 + i] = (double)abg[i];
-        }
+        store_truth(sr, j, R, d);
     }
     return 0;
 }

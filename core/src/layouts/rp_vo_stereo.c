@@ -431,6 +431,25 @@ static int pair_rejected(const rp_vo_stereo_t *vo, uint32_t n)
     return 0;
 }
 
+/* The update redone from the prediction with the pose covariance widened by d d^T, d the gap
+ * from the predicted pose to p (a pose found from the images), so that the velocity keeps its
+ * correlation with the pose. rp_ekf_update's status; retry receives its report. */
+static rp_status_t update_towards(rp_vo_stereo_t *vo, const rp_real p[6], uint32_t n,
+                                  rp_ekf_info_t *retry)
+{
+    rp_real d[6];
+    vo->ekf = vo->ekf_pred;
+    for (int i = 0; i < 6; ++i) {
+        d[i] = p[i] - vo->ekf_pred.x[i];
+    }
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
+        }
+    }
+    return rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, retry);
+}
+
 /* Step (3): predict, then the iterated update over all cameras' features.
  *
  * The gate of the update's first iteration compares each feature with the prediction. The
@@ -482,23 +501,13 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
          * inliers from the prediction with the pose covariance widened by d d^T, d the gap to
          * the re-found pose (so the velocity keeps its correlation with the pose); if that
          * still uses fewer than RANSAC found, the filter restarts at the re-found pose. */
-        rp_real p[6], cov[36], d[6];
+        rp_real p[6], cov[36];
         uint32_t n_inl = 0;
         if (robust_pose(vo, n, p, cov, &n_inl) == RP_OK && n_inl > first_n) {
-            vo->ekf = vo->ekf_pred;
-            for (int i = 0; i < 6; ++i) {
-                d[i] = p[i] - vo->ekf_pred.x[i];
-            }
-            for (int i = 0; i < 6; ++i) {
-                for (int j = 0; j < 6; ++j) {
-                    vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
-                }
-            }
             rp_ekf_info_t retry;
             vo->n_retried++;
             vo->n_refound++;
-            if (rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, &retry) == RP_OK &&
-                2u * retry.n_used >= n_inl) {
+            if (update_towards(vo, p, n, &retry) == RP_OK && 2u * retry.n_used >= n_inl) {
                 *info = retry;
                 info->n_gated = (uint16_t)(info->n_gated + n - n_inl); /* RANSAC's outliers */
                 return RP_OK;
@@ -524,24 +533,14 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
         }
     }
     rp_lowe_params_t lp = rp_lowe_default_params();
-    rp_real p[6], d[6];
+    rp_real p[6];
     memcpy(p, vo->ekf_pred.x, sizeof(p));
     const rp_status_t sl = rp_lowe_solve(vo->rig, vo->obs, n, &lp, p, NULL, NULL);
     if ((sl != RP_OK && sl != RP_E_NO_CONVERGE) || !rp_all_finite(p, 6)) {
         return st;
     }
-    vo->ekf = vo->ekf_pred;
-    for (int i = 0; i < 6; ++i) {
-        d[i] = p[i] - vo->ekf_pred.x[i];
-    }
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
-        }
-    }
     rp_ekf_info_t retry;
-    if (rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, &retry) == RP_OK &&
-        retry.n_used > first_info.n_used) {
+    if (update_towards(vo, p, n, &retry) == RP_OK && retry.n_used > first_info.n_used) {
         vo->n_retried++;
         *info = retry;
         return RP_OK;
