@@ -75,8 +75,8 @@ typedef struct {
 
 /* Defaults: rp_ekf_default_params with plant noise q_trans = 3 m^2/s^3, q_rot = 3 rad^2/s^3
  * (config/README.md says why); the paper's threshold of 50, 1.5 px epipolar band,
- * 0.05..100 m, 1.5 px, 1/30 s, structure refinement on, rig RANSAC on, 1-point RANSAC off (its cost:
- * config/README.md), no quarantine.
+ * 0.05..100 m, 1.5 px, 1/30 s, structure refinement on, rig RANSAC on, 1-point RANSAC on (its
+ * cost: config/README.md), no quarantine.
  * No pairs (n_pairs = 0): the caller
  * (or rp_pipe_default_cfg) names them. */
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);

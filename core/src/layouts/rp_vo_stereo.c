@@ -26,8 +26,7 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.default_dt_s = RP_C(1.0) / RP_C(30.0);
     c.refine_structure = 1;
     c.ransac = 1;
-    c.one_point = 0; /* off until it is cheaper: it costs 3.5-4x the frame time of Table 1
-                      * (config/README.md, `one_point`) */
+    c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
     c.quarantine = 0; /* config/README.md: 3 helps i.i.d. outliers, costs on real clips */
     return c;
 }
