@@ -518,8 +518,10 @@ static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
     else if (IS("max_depth_m") && st) v[0] = (double)p->stereo.max_depth_m;
     else if (IS("max_reproj_px") && st) v[0] = (double)p->stereo.max_reproj_px;
     else if (IS("refine_structure") && st) v[0] = p->stereo.refine_structure;
-    else if (IS("ransac") && st) v[0] = p->stereo.ransac;
-    else if (IS("one_point") && st) v[0] = p->stereo.one_point;
+    else if (IS("ransac")) v[0] = st ? p->stereo.ransac : gc ? p->gc.ransac : p->mono.ransac;
+    else if (IS("one_point")) {
+        v[0] = st ? p->stereo.one_point : gc ? p->gc.one_point : p->mono.one_point;
+    }
     else if (IS("quarantine") && st) v[0] = p->stereo.quarantine;
     else if (IS("init_depth_m") && !st) {
         v[0] = (double)(gc ? p->gc.init_depth_m : p->mono.init_depth_m);

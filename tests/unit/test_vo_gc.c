@@ -270,6 +270,71 @@ static void test_malformed_frameset_is_rejected_without_damage(void **state)
     simfx_free(fx);
 }
 
+/* Gross outliers (uniform pixels over the 640 x 480 image, drawn anew every frame) replacing a
+ * share of every camera's features, from a fixed generator. */
+static uint64_t g_out_rng;
+static double g_out_frac;
+static double out_u01(void)
+{
+    g_out_rng ^= g_out_rng >> 12;
+    g_out_rng ^= g_out_rng << 25;
+    g_out_rng ^= g_out_rng >> 27;
+    return (double)((g_out_rng * 0x2545F4914F6CDD1Dull) >> 11) / 9007199254740992.0;
+}
+static void gross_outliers(rp_frameset_t *fs, uint32_t j)
+{
+    (void)j;
+    for (uint8_t c = 0; c < RP_MAX_CAMS; ++c) {
+        for (uint16_t i = 0; i < fs->n[c]; ++i) {
+            if (out_u01() < g_out_frac) {
+                fs->f[c][i].uv[0] = (rp_real)(640.0 * out_u01());
+                fs->f[c][i].uv[1] = (rp_real)(480.0 * out_u01());
+            }
+        }
+    }
+}
+
+/* Feature-level simulation with 30 % gross outliers in every camera at every frame (issue 14's
+ * must-show: gc within 1.5x of its clean figures; NOT reached: measured 2 runs x 60 frames, 1-point
+ * RANSAC + re-find 27-126x the clean figures per column, the plain gated update 34-271x; the outliers still
+ * reach the landmarks through their structure EKFs and the top-ups). Pinned: the defaults beat the
+ * plain update in their worst column; all three printed. */
+static void test_thirty_percent_gross_outliers_everywhere(void **state)
+{
+    (void)state;
+    const int runs = 2;
+    const uint32_t frames = 60;
+    double clean[6] = {0}, robust[6] = {0}, plain[6] = {0};
+    for (int r = 0; r < runs; ++r) {
+        fixture_t *fx = fixture(0.5, frames, (uint32_t)r);
+        const rp_vo_gc_cfg_t def = gc_cfg(0.5);
+        outcome_t o;
+        run_sequence(fx, &def, frames, NULL, &o);
+        for (int i = 0; i < 6; ++i) clean[i] += o.err[i] / runs;
+        for (int m = 0; m < 2; ++m) {
+            rp_vo_gc_cfg_t cfg = def;
+            cfg.one_point = (uint8_t)(m == 0);
+            cfg.ransac = (uint8_t)(m == 0);
+            g_out_rng = 0x9E3779B97F4A7C15ull;
+            g_out_frac = 0.3;
+            run_sequence(fx, &cfg, frames, gross_outliers, &o);
+            for (int i = 0; i < 6; ++i) (m == 0 ? robust : plain)[i] += o.err[i] / runs;
+        }
+        simfx_free(fx);
+    }
+    simfx_print_err("gc clean", clean);
+    simfx_print_err("gc, 30 % outliers, 1-point RANSAC + re-find", robust);
+    simfx_print_err("gc, 30 % outliers, plain gated update", plain);
+    double w_robust = 0.0, w_plain = 0.0;
+    for (int i = 0; i < 6; ++i) {
+        w_robust = fmax(w_robust, robust[i] / clean[i]);
+        w_plain = fmax(w_plain, plain[i] / clean[i]);
+    }
+    print_message("worst column: %.1fx clean with the defaults, %.1fx with the plain update\n",
+                  w_robust, w_plain);
+    assert_true(w_robust < w_plain);
+}
+
 static void test_bad_configuration_is_refused(void **state)
 {
     (void)state;
@@ -282,6 +347,12 @@ static void test_bad_configuration_is_refused(void **state)
     assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.cams[3] = RP_SIM_CAM1; /* a camera twice */
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = gc_cfg(0.5);
+    cfg.one_point = 2; /* a switch is 0 or 1 */
+    assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = gc_cfg(0.5);
+    cfg.ransac = 2;
     assert_status(rp_vo_gc_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = gc_cfg(0.5);
     cfg.cams[1] = 9; /* no such camera */
@@ -338,6 +409,7 @@ int main(void)
         cmocka_unit_test(test_all_cameras_dark_reports_lost_then_recovers),
         cmocka_unit_test(test_nan_pixels_are_skipped),
         cmocka_unit_test(test_malformed_frameset_is_rejected_without_damage),
+        cmocka_unit_test(test_thirty_percent_gross_outliers_everywhere),
         cmocka_unit_test(test_bad_configuration_is_refused),
     };
     return cmocka_run_group_tests_name("vo_gc", tests, NULL, NULL);

@@ -239,6 +239,12 @@ static void test_bad_configuration_is_refused(void **state)
     cfg.ekf.sigma_px = -1;
     assert_status(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    cfg.one_point = 2; /* a switch is 0 or 1 */
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = mono_cfg(RP_SIM_CAM1, 0.5);
+    cfg.ransac = 2;
+    assert_status(rp_vo_mono_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    cfg = mono_cfg(RP_SIM_CAM1, 0.5);
     assert_status(rp_vo_mono_init(NULL, &fx->sim.sr.rig, &cfg), RP_E_ARG);
     assert_status(rp_vo_mono_init(&fx->vo, NULL, &cfg), RP_E_ARG);
     simfx_free(fx);

@@ -33,7 +33,11 @@
  *     filter's plain update (measured: up to 1.14x the error on Table 1); one update on the
  *     inlier set is the plain update whenever that set is every observation the plain gate
  *     keeps. What is still left out is tested against the new posterior as in 2, and the update
- *     repeated from the prior if that adds any (3 updates at most).
+ *     repeated from the prior if that adds any (3 updates at most). When consensus + rescued are
+ *     under half of the usable observations there is no majority to trust: the consensus is
+ *     then judging the model (a map whose errors exceed sigma_px), not the observations, and
+ *     the plain update is made instead (rp_ekf_update's own rule for a gate that would reject
+ *     more than it keeps); the layouts' re-find (rig RANSAC) handles a wrong prediction.
  * No heap; the generator's state lives in the caller's rp_ekf1pt_t, so a fixed sequence of
  * inputs gives a fixed sequence of outputs.
  */
@@ -82,6 +86,8 @@ typedef struct {
     uint16_t n_low;     /* low-innovation inliers (the winner's support) */
     uint16_t n_rescued; /* used, and not in the winner's support (rescued) */
     uint16_t n_usable;  /* observations that could be hypotheses */
+    uint8_t n_no_majority; /* 1: consensus + rescued were under half of the usable ones, and
+                            * the plain update was made instead */
 } rp_ekf1pt_info_t;
 
 /* Seed the generator (any seed). RP_E_ARG for NULL. */

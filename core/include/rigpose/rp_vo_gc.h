@@ -20,6 +20,17 @@
  *     the ray under mature_frac of its range); until then it only feeds its structure EKF.
  *     While fewer than min_mature landmarks are converged (start-up), every landmark enters,
  *     weighted as above.
+ *     With `one_point` the update is 1-point RANSAC (rp_ekf1pt.h): hypotheses from single
+ *     observations through the prior, the consensus and its rescued inliers update the filter,
+ *     the others are left out (counted as gated). This is also gc's robust start: at frame 1
+ *     the landmarks' depths are still the assumed one (no metric structure for a minimal
+ *     solver), but the filter's prior at the origin is what 1-point RANSAC needs.
+ *     With `ransac`, once min_mature landmarks have converged (metric structure), an update
+ *     that leaves most of the offered observations out (or fails with enough of them) says
+ *     the prediction is wrong: the pose is re-found from the images by rig RANSAC over every
+ *     camera (rp_ransac.h, gate on 2 sigma_px^2 as stereo's), and the update redone on its
+ *     inliers from the prediction with the pose covariance widened by d d^T, d the gap to the
+ *     re-found pose; kept if it uses at least half of the inliers (n_refound counts these).
  *  3. After the pose update each observed landmark's structure EKF takes its pixel at the
  *     updated pose, with the pose's projected uncertainty added to the pixel noise (the pose is
  *     taken as known, but not as exact).
@@ -60,10 +71,12 @@
 #define RP_VO_GC_H
 
 #include "rp_ekf.h"
+#include "rp_ekf1pt.h"
 #include "rp_frame.h"
 #include "rp_gcba.h"
 #include "rp_lmtab.h"
 #include "rp_obs.h"
+#include "rp_ransac.h"
 #include "rp_rig.h"
 #include "rp_struct.h"
 
@@ -112,6 +125,10 @@ typedef struct {
     rp_real ba_var_scale;         /* a window's scale variance is multiplied by this before it
                                    * is fused (windows overlap: they share observations), >= 1 */
     rp_gcba_cfg_t ba;             /* the adjustment (rp_gcba.h) */
+    uint8_t one_point;            /* 1: every pose update through 1-point RANSAC (rp_ekf1pt.h);
+                                   * 0: the plain gated update */
+    uint8_t ransac;               /* 1: the pose re-found by rig RANSAC when most observations
+                                   * are left out (step 2); 0: never */
 } rp_vo_gc_cfg_t;
 
 /* Step 6's fixed rules (rp_vo_gc_scale.c). */
@@ -128,7 +145,7 @@ typedef struct {
  * position drift 6e-5 m and orientation drift 1e-4 rad per sqrt(frame), 1/30 s; step 6 on:
  * map unit prior 1 +- 0.3, no random walk, a keyframe every 4 frames with 80 landmarks per
  * camera, windows of 6 keyframes adjusted every 2 keyframes (2 Gauss-Newton iterations), the
- * window's variance times 3. */
+ * window's variance times 3; 1-point RANSAC and the rig RANSAC re-find on. */
 rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void);
 
 #define RP_VO_GC_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
@@ -163,11 +180,17 @@ typedef struct {
     uint32_t obs_id[RP_VO_GC_MAX_OBS];     /* scratch: landmark id of obs[i] */
     rp_obs_t pobs[RP_VO_GC_MAX_OBS];       /* scratch: the pose update's subset */
     uint8_t pused[RP_VO_GC_MAX_OBS];
+    uint8_t inl[RP_VO_GC_MAX_OBS];         /* scratch: rig RANSAC's inliers among pobs */
+    rp_ekf_t ekf_pred;                     /* scratch: the prediction, for a re-found update */
+    rp_ekf1pt_t op;                        /* 1-point RANSAC's generator and scratch */
+    rp_ransac_t rs;                        /* rig RANSAC's generator and scratch */
+    uint32_t n_refound;                    /* updates redone at a pose re-found by rig RANSAC */
 } rp_vo_gc_t;
 
 /* Set up the estimator for rig (which must outlive it) with cfg. The world is cam1's frame at
  * the first frame set. RP_E_ARG (bad config: no camera, index out of range or repeated,
- * min_tracked < 6, non-positive depth, sigma or dt, negative mature_frac), rp_rig_check's
+ * min_tracked < 6, non-positive depth, sigma or dt, negative mature_frac, a switch other than
+ * 0 or 1), rp_rig_check's
  * errors, rp_ekf_init's errors. */
 rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cfg_t *cfg);
 

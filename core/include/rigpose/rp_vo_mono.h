@@ -14,7 +14,16 @@
  *  2. At the second frame the pose EKF is started from Lowe's method (rp_lowe_solve).
  *  3. Every later frame: prediction, then the iterated update with every tracked landmark; each
  *     observation is weighted by its structure uncertainty (w = s^2 / (s^2 + projected point
- *     variance)), so fresh, depth-uncertain points count little.
+ *     variance)), so fresh, depth-uncertain points count little. With `one_point` the update
+ *     is 1-point RANSAC (rp_ekf1pt.h); observations it leaves out count as gated (their
+ *     landmarks are dropped). With `ransac`, an update that leaves most observations out (or
+ *     fails with enough of them) says the prediction is wrong: the camera's pose is re-found by
+ *     RANSAC (P3P on the one camera, rp_ransac.h, gate on 2 sigma_px^2 / w: the weights carry
+ *     the assumed depths' uncertainty), and the update redone on its inliers from the
+ *     prediction with the pose covariance widened by d d^T, d the gap to the re-found pose;
+ *     kept if it uses at least half of them (n_refound). The start (2) stays Lowe's method:
+ *     at the second frame every landmark is at the assumed depth, so a minimal solver has no
+ *     metric structure to work on; outliers there are left to the updates after it.
  *  4. After the pose update each used feature's structure EKF takes the observation at the new
  *     pose. A landmark missing from a frame is dropped for good.
  * The translation scale of a single camera comes only from the assumed depth.
@@ -26,9 +35,11 @@
 #define RP_VO_MONO_H
 
 #include "rp_ekf.h"
+#include "rp_ekf1pt.h"
 #include "rp_frame.h"
 #include "rp_lmtab.h"
 #include "rp_obs.h"
+#include "rp_ransac.h"
 #include "rp_rig.h"
 #include "rp_struct.h"
 
@@ -44,13 +55,17 @@ typedef struct {
     rp_real init_depth_sigma_m; /* its 1-sigma uncertainty, m (> 0) */
     rp_real default_dt_s;       /* frame interval used when timestamps are missing, s */
     uint8_t weight_by_structure;/* 1: weight pose observations by structure uncertainty */
+    uint8_t one_point;          /* 1: every update through 1-point RANSAC (rp_ekf1pt.h) */
+    uint8_t ransac;             /* 1: the pose re-found by RANSAC when most observations are
+                                 * left out (step 3) */
 } rp_vo_mono_cfg_t;
 
 #define RP_VO_MONO_MIN_WEIGHT RP_C(1e-6) /* least structure weight w of an observation (and the
                                          * weight of one whose w is not finite); keeps every
                                          * gathered observation in the pose update's sums */
 
-/* Defaults: camera 0, threshold 50, depth 1 m +- 0.3 m, 1/30 s, weighting on. */
+/* Defaults: camera 0, threshold 50, depth 1 m +- 0.3 m, 1/30 s, weighting on, 1-point RANSAC
+ * and the RANSAC re-find on. */
 rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void);
 
 #define RP_VO_MONO_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
@@ -70,10 +85,17 @@ typedef struct {
     rp_obs_t obs[RP_MAX_FEATS_PER_CAM];  /* scratch */
     uint8_t used[RP_MAX_FEATS_PER_CAM];
     uint32_t obs_id[RP_MAX_FEATS_PER_CAM];
+    uint8_t inl[RP_MAX_FEATS_PER_CAM];   /* scratch: RANSAC's inliers */
+    uint8_t first_used[RP_MAX_FEATS_PER_CAM]; /* scratch: the first update's used flags */
+    rp_ekf_t ekf_pred;                 /* scratch: the prediction, for a re-found update */
+    rp_ekf1pt_t op;                    /* 1-point RANSAC's generator and scratch */
+    rp_ransac_t rs;                    /* RANSAC's generator and scratch */
+    uint32_t n_refound;                /* updates redone at a pose re-found by RANSAC */
 } rp_vo_mono_t;
 
 /* Set up for rig (must outlive the estimator). RP_E_ARG (cam out of range, min_tracked < 6,
- * non-positive depth, depth sigma or dt, bad EKF params), rp_rig_check's errors. */
+ * non-positive depth, depth sigma or dt, bad EKF params, a switch other than 0 or 1),
+ * rp_rig_check's errors. */
 rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_mono_cfg_t *cfg);
 
 /* Process one frame set (only camera cfg.cam's features are read). est (never NULL) receives

@@ -11,6 +11,7 @@
 #define NP 6
 #define RESCUE_ROUNDS 3 /* updates from the prior at most (rescue rounds) */
 #define LO_ROUNDS 3     /* refinements of one new best at most */
+#define RESCUE_VAR RP_C(2.0) /* the rescue's pixel variance, in s2 / w */
 #define LO_MAX_OBS 64   /* observations a refinement uses at most */
 #define LO_ITERATIONS 2 /* linearisations of a refinement: the prior can be off by the motion
                          * of a frame (tens of px), where one linearisation leaves more than
@@ -192,7 +193,7 @@ static uint32_t rescue(rp_ekf1pt_t *s, const rp_ekf_t *ekf, const rp_rig_t *rig,
             rp_rig_project(rig, obs[k].cam, &pl, obs[k].M, uv, J, NULL) != RP_OK) {
             continue;
         }
-        innov_cov(J, C, s2 / obs[k].w, S, CJt);
+        innov_cov(J, C, RESCUE_VAR * s2 / obs[k].w, S, CJt);
         if (!inv2(S, Si)) {
             continue;
         }
@@ -312,7 +313,16 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
      * further round tests what is still left out against the final posterior and repeats the
      * update if it adds any (RESCUE_ROUNDS in all). */
     memcpy(s->low, s->best, n);
-    (void)rescue(s, &s->post, rig, obs, n, s2, gate);
+    const uint32_t n_in = best + rescue(s, &s->post, rig, obs, n, s2, gate);
+    if (2u * n_in < n_ok) {
+        /* No majority: the consensus judges the model (e.g. a map whose errors exceed a tiny
+         * sigma_px), not the observations: the filter's plain update, as rp_ekf_update itself
+         * uses every feature when its gate would reject more than it keeps. */
+        *ekf = s->prior;
+        const rp_status_t st0 = rp_ekf_update(ekf, rig, obs, n, used, &info->ekf);
+        info->n_no_majority = 1;
+        return st0;
+    }
     rp_status_t st = RP_OK;
     for (int round = 0; round < RESCUE_ROUNDS; ++round) {
         for (uint32_t k = 0; k < n; ++k) {

@@ -9,6 +9,8 @@
 #include "rigpose/rp_rot.h"
 #include "rigpose/rp_vo.h"
 
+#define RANSAC_SEED 0x5EED5u /* any fixed value: the run is a function of its input */
+
 rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void)
 {
     rp_vo_gc_cfg_t c;
@@ -33,6 +35,8 @@ rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void)
     c.ba_var_scale = RP_C(3.0);
     c.ba = rp_gcba_default_cfg();
     c.ba.iterations = 2;
+    c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
+    c.ransac = 1;
     return c;
 }
 
@@ -88,7 +92,8 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
         !(cfg->init_depth_m > RP_C(0.0)) || !rp_finite(cfg->init_depth_m) ||
         !(cfg->init_depth_sigma_m > RP_C(0.0)) || !rp_finite(cfg->init_depth_sigma_m) ||
         !(cfg->mature_frac >= RP_C(0.0)) || !rp_finite(cfg->mature_frac) ||
-        !(cfg->default_dt_s > RP_C(0.0)) || !rp_finite(cfg->default_dt_s)) {
+        !(cfg->default_dt_s > RP_C(0.0)) || !rp_finite(cfg->default_dt_s) ||
+        cfg->one_point > 1 || cfg->ransac > 1) {
         return RP_E_ARG;
     }
     uint8_t in_use[RP_MAX_CAMS] = {0};
@@ -105,6 +110,8 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
     rp_vo_gc_set_mu(vo, RP_C(1.0));
     vo->ekf = idle;
     (void)rp_lmtab_clear(&vo->lm);
+    (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
+    (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
     return RP_OK;
 }
 
@@ -441,6 +448,85 @@ static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
     }
 }
 
+/* Step 2's re-find: rig RANSAC over the m offered observations (vo->pobs), its gate the
+ * filter's on a residual of variance 2 sigma_px^2 (a landmark placed from earlier pixels
+ * carries their noise too), then the update redone on its inliers from the prediction with the
+ * pose covariance widened by d d^T, d the gap from the predicted pose to RANSAC's. Kept (RP_OK,
+ * vo->ekf, vo->pused, *info) when RANSAC found more inliers than the first update used and the
+ * redone update uses at least half of them; otherwise RP_E_TOO_FEW and vo->ekf as it was given
+ * (vo->pobs's weights are scratch: RANSAC's outliers may be left at 0). */
+static rp_status_t refind(rp_vo_gc_t *vo, uint32_t m, uint32_t first_used, rp_ekf_info_t *info)
+{
+    rp_ransac_params_t rp = rp_ransac_default_params();
+    rp.sigma_px = vo->cfg.ekf.sigma_px * RP_C(1.4142135623730951);
+    if (vo->cfg.ekf.gate_chi2 > RP_C(0.0)) {
+        rp.chi2 = vo->cfg.ekf.gate_chi2;
+    }
+    rp.min_inliers = vo->cfg.ekf.min_features > rp.min_inliers ? vo->cfg.ekf.min_features
+                                                               : rp.min_inliers;
+    rp_ransac_result_t res;
+    if (rp_ransac_solve(&vo->rs, &vo->rig_m, vo->pobs, m, &rp, vo->inl, &res) != RP_OK ||
+        res.n_inliers <= first_used) {
+        return RP_E_TOO_FEW;
+    }
+    const rp_ekf_t first = vo->ekf;
+    vo->ekf = vo->ekf_pred;
+    rp_real d[6];
+    for (int i = 0; i < 6; ++i) {
+        d[i] = res.p[i] - vo->ekf_pred.x[i];
+    }
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
+        }
+    }
+    for (uint32_t i = 0; i < m; ++i) {
+        if (!vo->inl[i]) {
+            vo->pobs[i].w = RP_C(0.0);
+        }
+    }
+    rp_ekf_info_t retry;
+    if (rp_ekf_update(&vo->ekf, &vo->rig_m, vo->pobs, m, vo->pused, &retry) == RP_OK &&
+        2u * retry.n_used >= res.n_inliers) {
+        *info = retry;
+        info->n_gated = (uint16_t)(info->n_gated + m - res.n_inliers); /* RANSAC's outliers */
+        info->n_outside = info->n_gated;
+        vo->n_refound++;
+        return RP_OK;
+    }
+    vo->ekf = first;
+    return RP_E_TOO_FEW;
+}
+
+/* Step 2's pose update of the m offered observations vo->pobs: 1-point RANSAC or the plain
+ * gated update, then (cfg.ransac, metric structure) the re-find when most were left out or the
+ * update failed with enough of them. */
+static rp_status_t pose_update(rp_vo_gc_t *vo, uint32_t m, uint32_t n_mature,
+                               rp_ekf_info_t *info)
+{
+    vo->ekf_pred = vo->ekf;
+    rp_status_t st;
+    if (vo->cfg.one_point) {
+        rp_ekf1pt_info_t oi;
+        st = rp_ekf1pt_update(&vo->op, &vo->ekf, &vo->rig_m, vo->pobs, m, NULL, vo->pused, &oi);
+        *info = oi.ekf;
+    } else {
+        st = rp_ekf_update(&vo->ekf, &vo->rig_m, vo->pobs, m, vo->pused, info);
+    }
+    const int most_out = st == RP_OK ? 2u * info->n_outside > m : m >= vo->cfg.ekf.min_features;
+    if (!vo->cfg.ransac || !most_out || n_mature < vo->cfg.min_mature) {
+        return st;
+    }
+    const rp_ekf_info_t first_info = *info;
+    memcpy(vo->used, vo->pused, m); /* vo->used is rebuilt from vo->pused after the update */
+    if (refind(vo, m, st == RP_OK ? first_info.n_used : 0u, info) == RP_OK) {
+        return RP_OK;
+    }
+    memcpy(vo->pused, vo->used, m);
+    *info = first_info;
+    return st;
+}
+
 rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
 {
     if (!vo || !est) {
@@ -474,7 +560,7 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
     if (st == RP_OK) {
         const uint32_t m = select_for_pose(vo, n, &n_mature);
         rp_ekf_info_t info;
-        st = rp_ekf_update(&vo->ekf, &vo->rig_m, vo->pobs, m, vo->pused, &info);
+        st = pose_update(vo, m, n_mature, &info);
         n_gated = info.n_gated;
         if (info.cov_reset) {
             flags |= RP_EST_COV_RESET;

@@ -9,6 +9,8 @@
 #include "rigpose/rp_vo.h"
 #include "rigpose/rp_vo_mono.h"
 
+#define RANSAC_SEED 0x5EED5u /* any fixed value: the run is a function of its input */
+
 rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void)
 {
     rp_vo_mono_cfg_t c;
@@ -20,6 +22,8 @@ rp_vo_mono_cfg_t rp_vo_mono_default_cfg(void)
     c.init_depth_sigma_m = RP_C(0.3);
     c.default_dt_s = RP_C(1.0) / RP_C(30.0);
     c.weight_by_structure = 1;
+    c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
+    c.ransac = 1;
     return c;
 }
 
@@ -32,7 +36,8 @@ rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_m
     }
     if (cfg->cam >= rig->n_cams || cfg->min_tracked < 6 || !(cfg->init_depth_m > RP_C(0.0)) ||
         !(cfg->init_depth_sigma_m > RP_C(0.0)) || !(cfg->default_dt_s > RP_C(0.0)) ||
-        !rp_finite(cfg->init_depth_m) || !rp_finite(cfg->init_depth_sigma_m)) {
+        !rp_finite(cfg->init_depth_m) || !rp_finite(cfg->init_depth_sigma_m) ||
+        cfg->one_point > 1 || cfg->ransac > 1) {
         return RP_E_ARG;
     }
     memset(vo, 0, sizeof(*vo));
@@ -44,6 +49,8 @@ rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_m
     vo->own.cam[0].cam = rig->cam[cfg->cam].cam;
     vo->ekf = idle;
     (void)rp_lmtab_clear(&vo->lm);
+    (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
+    (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
     return RP_OK;
 }
 
@@ -293,6 +300,81 @@ static rp_status_t start_with_lowe(rp_vo_mono_t *vo, uint32_t n, rp_real dt)
     return RP_OK;
 }
 
+/* Step (3)'s re-find: RANSAC (P3P on the one camera) over the n observations, gate on
+ * 2 sigma_px^2 / w (the landmark carries earlier pixels' noise), then the update redone on its
+ * inliers from the prediction with the pose covariance widened by d d^T, d the gap from the
+ * predicted pose to RANSAC's. RP_OK (vo->ekf, vo->used, *info replaced) when RANSAC found more
+ * inliers than first_used and the redone update uses at least half of them; otherwise
+ * RP_E_TOO_FEW, vo->ekf as given (RANSAC's outliers may be left at w = 0 in vo->obs). */
+static rp_status_t refind(rp_vo_mono_t *vo, uint32_t n, uint32_t first_used, rp_ekf_info_t *info)
+{
+    rp_ransac_params_t rp = rp_ransac_default_params();
+    rp.sigma_px = vo->cfg.ekf.sigma_px * RP_C(1.4142135623730951);
+    if (vo->cfg.ekf.gate_chi2 > RP_C(0.0)) {
+        rp.chi2 = vo->cfg.ekf.gate_chi2;
+    }
+    rp.min_inliers = vo->cfg.ekf.min_features > rp.min_inliers ? vo->cfg.ekf.min_features
+                                                               : rp.min_inliers;
+    rp_ransac_result_t res;
+    if (rp_ransac_solve(&vo->rs, &vo->own, vo->obs, n, &rp, vo->inl, &res) != RP_OK ||
+        res.n_inliers <= first_used) {
+        return RP_E_TOO_FEW;
+    }
+    const rp_ekf_t first = vo->ekf;
+    vo->ekf = vo->ekf_pred;
+    rp_real d[6];
+    for (int i = 0; i < 6; ++i) {
+        d[i] = res.p[i] - vo->ekf_pred.x[i];
+    }
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
+        }
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!vo->inl[i]) {
+            vo->obs[i].w = RP_C(0.0);
+        }
+    }
+    rp_ekf_info_t retry;
+    if (rp_ekf_update(&vo->ekf, &vo->own, vo->obs, n, vo->used, &retry) == RP_OK &&
+        2u * retry.n_used >= res.n_inliers) {
+        *info = retry;
+        info->n_gated = (uint16_t)(info->n_gated + n - res.n_inliers); /* RANSAC's outliers */
+        vo->n_refound++;
+        return RP_OK;
+    }
+    vo->ekf = first;
+    return RP_E_TOO_FEW;
+}
+
+/* Step (3)'s update: 1-point RANSAC or the plain gated update, then (cfg.ransac) the re-find
+ * when most observations were left out or the update failed with enough of them. */
+static rp_status_t pose_update(rp_vo_mono_t *vo, uint32_t n, rp_ekf_info_t *info)
+{
+    vo->ekf_pred = vo->ekf;
+    rp_status_t st;
+    if (vo->cfg.one_point) {
+        rp_ekf1pt_info_t oi;
+        st = rp_ekf1pt_update(&vo->op, &vo->ekf, &vo->own, vo->obs, n, NULL, vo->used, &oi);
+        *info = oi.ekf;
+    } else {
+        st = rp_ekf_update(&vo->ekf, &vo->own, vo->obs, n, vo->used, info);
+    }
+    const int most_out = st == RP_OK ? 2u * info->n_outside > n : n >= vo->cfg.ekf.min_features;
+    if (!vo->cfg.ransac || !most_out) {
+        return st;
+    }
+    const rp_ekf_info_t first_info = *info;
+    memcpy(vo->first_used, vo->used, n);
+    if (refind(vo, n, st == RP_OK ? first_info.n_used : 0u, info) == RP_OK) {
+        return RP_OK;
+    }
+    memcpy(vo->used, vo->first_used, n);
+    *info = first_info;
+    return st;
+}
+
 rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estimate_t *est,
                             rp_estimate_t *own)
 {
@@ -340,7 +422,7 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
             st = start_with_lowe(vo, n, dt);
         } else {
             rp_ekf_info_t info;
-            st = rp_ekf_update(&vo->ekf, &vo->own, vo->obs, n, vo->used, &info);
+            st = pose_update(vo, n, &info);
             n_gated = info.n_gated;
             if (info.cov_reset) {
                 flags |= RP_EST_COV_RESET;

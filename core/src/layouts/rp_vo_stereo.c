@@ -432,7 +432,8 @@ static int pair_rejected(const rp_vo_stereo_t *vo, uint32_t n)
 
 /* The update redone from the prediction with the pose covariance widened by d d^T, d the gap
  * from the predicted pose to p (a pose found from the images), so that the velocity keeps its
- * correlation with the pose. rp_ekf_update's status; retry receives its report. */
+ * correlation with the pose; through 1-point RANSAC with cfg.one_point. The update's status;
+ * retry receives its report. */
 static rp_status_t update_towards(rp_vo_stereo_t *vo, const rp_real p[6], uint32_t n,
                                   rp_ekf_info_t *retry)
 {
@@ -445,6 +446,15 @@ static rp_status_t update_towards(rp_vo_stereo_t *vo, const rp_real p[6], uint32
         for (int j = 0; j < 6; ++j) {
             vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
         }
+    }
+    if (vo->cfg.one_point) {
+        /* the retry too keeps to the largest consensus: a self-consistent group (a moving
+         * object) that the first update left out must not come back through it */
+        rp_ekf1pt_info_t oi;
+        const rp_status_t st =
+            rp_ekf1pt_update(&vo->op, &vo->ekf, vo->rig, vo->obs, n, NULL, vo->used, &oi);
+        *retry = oi.ekf;
+        return st;
     }
     return rp_ekf_update(&vo->ekf, vo->rig, vo->obs, n, vo->used, retry);
 }
