@@ -295,10 +295,11 @@ static void gross_outliers(rp_frameset_t *fs, uint32_t j)
 }
 
 /* Feature-level simulation with 30 % gross outliers in every camera at every frame (issue 14's
- * must-show: gc within 1.5x of its clean figures; NOT reached: measured 2 runs x 60 frames, 1-point
- * RANSAC + re-find 27-126x the clean figures per column, the plain gated update 34-271x; the outliers still
- * reach the landmarks through their structure EKFs and the top-ups). Pinned: the defaults beat the
- * plain update in their worst column; all three printed. */
+ * must-show: gc within 1.5x of its clean figures). Met in the translations, NOT in the angles:
+ * measured with the defaults (1-point RANSAC and the re-find), 2 runs x 60 frames, tx ty tz
+ * 0.4-0.7x and alpha beta gamma 1.3-1.7x the clean figures (4 runs: 0.4-0.5x and 1.2-2.3x); the
+ * plain gated update 34-271x. Pinned: the requirement on the translations, and that the plain
+ * update misses it; the angles are printed. */
 static void test_thirty_percent_gross_outliers_everywhere(void **state)
 {
     (void)state;
@@ -332,7 +333,8 @@ static void test_thirty_percent_gross_outliers_everywhere(void **state)
     }
     print_message("worst column: %.1fx clean with the defaults, %.1fx with the plain update\n",
                   w_robust, w_plain);
-    assert_true(w_robust < w_plain);
+    for (int i = 0; i < 3; ++i) assert_true(robust[i] <= 1.5 * clean[i]);
+    assert_true(w_plain > 1.5); /* the test can fail */
 }
 
 static void test_bad_configuration_is_refused(void **state)

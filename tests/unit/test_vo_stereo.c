@@ -377,15 +377,21 @@ static void test_turn_onset_with_outliers_is_refound_by_ransac(void **state)
 {
     (void)state;
     const uint32_t frames = 30, jump = 20;
-    double worst[2] = {0.0, 0.0};
+    /* m = 0: the plain update without rig RANSAC, 1: the plain update with it (the re-find is
+     * what recovers), 2: the defaults (1-point RANSAC's hypotheses through the prior find the
+     * turn themselves) */
+    double worst[3] = {0.0, 0.0, 0.0};
     uint32_t refound = 0;
-    for (int on = 1; on >= 0; --on) {
+    for (int m = 2; m >= 0; --m) {
         fixture_t *fx = fixture(0.5, frames, 0);
         rp_sim_run_t *sr = &fx->sim.sr;
         static const double off[6] = {0.0, 0.0, 0.0, 0.0, 0.15, 0.0};
         set_jump_trajectory(sr, frames, jump, off);
         rp_vo_stereo_cfg_t cfg = stereo_cfg(2, 0.5);
-        cfg.ransac = (uint8_t)on;
+        if (m < 2) {
+            cfg.ransac = (uint8_t)m;
+            cfg.one_point = 0;
+        }
         assert_ok(rp_vo_stereo_init(&fx->vo, &sr->rig, &cfg));
         set_outliers(0.3, jump, jump);
         for (uint32_t j = 0; j < frames; ++j) {
@@ -393,17 +399,19 @@ static void test_turn_onset_with_outliers_is_refound_by_ransac(void **state)
             gross_outliers(&fx->sim.fs, j);
             (void)rp_vo_stereo_step(&fx->vo, &fx->sim.fs, &fx->sim.est);
             for (int i = 0; j >= jump && i < 6; ++i) {
-                worst[on] = fmax(worst[on],
-                                 fabs((double)fx->sim.est.p[i] - sr->truth[6u * j + i]));
+                worst[m] = fmax(worst[m],
+                                fabs((double)fx->sim.est.p[i] - sr->truth[6u * j + i]));
             }
         }
-        if (on) refound = fx->vo.n_refound;
+        if (m == 1) refound = fx->vo.n_refound;
         simfx_free(fx);
     }
     print_message("turn onset + 30 %% outliers: worst pose error from the jump on %.2e with "
-                  "RANSAC (%u re-found), %.2e without\n", worst[1], refound, worst[0]);
+                  "rig RANSAC (%u re-found), %.2e without, %.2e with the defaults\n", worst[1],
+                  refound, worst[0], worst[2]);
     assert_true(refound >= 1);
     assert_true(worst[1] < 2e-3);
+    assert_true(worst[2] < 2e-3);
     assert_true(worst[0] > 2.0 * worst[1]); /* the test can fail */
 }
 

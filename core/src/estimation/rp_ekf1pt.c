@@ -23,6 +23,7 @@ rp_ekf1pt_params_t rp_ekf1pt_default_params(void)
     p.confidence = RP_C(0.99);
     p.min_hyp = 2;
     p.max_hyp = 200;
+    p.plain_without_majority = 0;
     return p;
 }
 
@@ -223,7 +224,7 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
     }
     if (!s || !ekf || !rig || (n > 0 && !obs) || n > RP_EKF1PT_MAX_OBS ||
         !(prm->confidence > RP_C(0.0) && prm->confidence < RP_C(1.0)) || prm->max_hyp < 1 ||
-        prm->min_hyp > prm->max_hyp) {
+        prm->min_hyp > prm->max_hyp || prm->plain_without_majority > 1) {
         return RP_E_ARG;
     }
     if (used) {
@@ -314,7 +315,7 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
      * update if it adds any (RESCUE_ROUNDS in all). */
     memcpy(s->low, s->best, n);
     const uint32_t n_in = best + rescue(s, &s->post, rig, obs, n, s2, gate);
-    if (2u * n_in < n_ok) {
+    if (prm->plain_without_majority && 2u * n_in < n_ok) {
         /* No majority: the consensus judges the model (e.g. a map whose errors exceed a tiny
          * sigma_px), not the observations: the filter's plain update, as rp_ekf_update itself
          * uses every feature when its gate would reject more than it keeps. */

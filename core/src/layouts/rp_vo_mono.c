@@ -356,7 +356,9 @@ static rp_status_t pose_update(rp_vo_mono_t *vo, uint32_t n, rp_ekf_info_t *info
     rp_status_t st;
     if (vo->cfg.one_point) {
         rp_ekf1pt_info_t oi;
-        st = rp_ekf1pt_update(&vo->op, &vo->ekf, &vo->own, vo->obs, n, NULL, vo->used, &oi);
+        rp_ekf1pt_params_t op = rp_ekf1pt_default_params();
+        op.plain_without_majority = 1; /* rp_vo_mono.h, step 3 */
+        st = rp_ekf1pt_update(&vo->op, &vo->ekf, &vo->own, vo->obs, n, &op, vo->used, &oi);
         *info = oi.ekf;
     } else {
         st = rp_ekf_update(&vo->ekf, &vo->own, vo->obs, n, vo->used, info);
