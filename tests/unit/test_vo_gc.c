@@ -297,7 +297,7 @@ static void gross_outliers(rp_frameset_t *fs, uint32_t j)
 /* Feature-level simulation with 30 % gross outliers in every camera at every frame (issue 14's
  * must-show: gc within 1.5x of its clean figures). Met in the translations, NOT in the angles:
  * measured with the defaults (1-point RANSAC and the re-find), 2 runs x 60 frames, tx ty tz
- * 0.4-0.7x and alpha beta gamma 1.3-1.7x the clean figures (4 runs: 0.4-0.5x and 1.2-2.3x); the
+ * 0.4-0.7x and alpha beta gamma 1.3-1.9x the clean figures (4 runs: 0.4-0.5x and 1.2-2.3x); the
  * plain gated update 34-271x. Pinned: the requirement on the translations, and that the plain
  * update misses it; the angles are printed. */
 static void test_thirty_percent_gross_outliers_everywhere(void **state)
