@@ -728,6 +728,7 @@ int main(int argc, char **argv)
     std::printf("| largest / final error | %.4f m / %.4f m |\n", s.max_m, s.final_m);
     std::printf("| rotation error (RMSE) | %.3f deg |\n", s.rot_rmse_deg);
     std::printf("| frame-to-frame drift (RPE / path) | %.3f %% |\n", s.rpe_percent);
+    std::printf("| scale of the positions (est / true, least squares) | %.4f |\n", s.scale);
     std::printf("| frames lost / re-initialised | %zu / %zu |\n", lost, reinit);
     std::printf("| pipeline time per frame set | %.2f ms |\n", ms);
     rprd::Summary ref, dref, spliced;
@@ -743,8 +744,9 @@ int main(int argc, char **argv)
         if (ok) {
             ref = rprd::summarise(traj, seq.truth);
             std::printf("| yardstick: OpenCV frame-to-frame stereo PnP, ATE / path | %.3f %% "
-                        "(%.4f m) |\n| yardstick: its RPE / path | %.3f %% |\n",
-                        ref.ate_percent, ref.ate_m, ref.rpe_percent);
+                        "(%.4f m) |\n| yardstick: its RPE / path | %.3f %% |\n"
+                        "| yardstick: its scale | %.4f |\n",
+                        ref.ate_percent, ref.ate_m, ref.rpe_percent, ref.scale);
         } else {
             std::printf("yardstick: OpenCV stereo odometry failed\n");
             traj.clear();
@@ -754,8 +756,9 @@ int main(int argc, char **argv)
         if (rprd::direct_reference(seq, dopts, &dtraj, nullptr, &err)) {
             dref = rprd::summarise(dtraj, seq.truth);
             std::printf("| yardstick 2: dense direct stereo odometry, ATE / path | %.3f %% "
-                        "(%.4f m) |\n| yardstick 2: its RPE / path | %.3f %% |\n",
-                        dref.ate_percent, dref.ate_m, dref.rpe_percent);
+                        "(%.4f m) |\n| yardstick 2: its RPE / path | %.3f %% |\n"
+                        "| yardstick 2: its scale | %.4f |\n",
+                        dref.ate_percent, dref.ate_m, dref.rpe_percent, dref.scale);
         } else {
             std::printf("%s\n", err.c_str());
             dtraj.clear();
@@ -784,20 +787,20 @@ int main(int argc, char **argv)
         std::fprintf(f,
                      "{\"%s_ate_m\": %.6f, \"%s_ate_percent\": %.6f, \"%s_path_m\": %.4f, "
                      "\"%s_max_err_m\": %.6f, \"%s_rot_rmse_deg\": %.5f, \"%s_rpe_percent\": %.5f, \"%s_frames\": %zu, "
-                     "\"%s_frames_lost\": %zu, \"%s_ms_per_frame\": %.3f",
+                     "\"%s_frames_lost\": %zu, \"%s_ms_per_frame\": %.3f, \"%s_scale\": %.5f",
                      n, s.ate_m, n, s.ate_percent, n, s.path_m, n, s.max_m, n, s.rot_rmse_deg, n, s.rpe_percent, n,
-                     s.frames, n, lost, n, ms);
+                     s.frames, n, lost, n, ms, n, s.scale);
         if (ref.frames) {
             std::fprintf(f,
                          ", \"%s_opencv_ref_ate_percent\": %.6f, \"%s_opencv_ref_rpe_percent\": "
-                         "%.5f",
-                         n, ref.ate_percent, n, ref.rpe_percent);
+                         "%.5f, \"%s_opencv_ref_scale\": %.5f",
+                         n, ref.ate_percent, n, ref.rpe_percent, n, ref.scale);
         }
         if (dref.frames) {
             std::fprintf(f,
                          ", \"%s_direct_ref_ate_percent\": %.6f, \"%s_direct_ref_rpe_percent\": "
-                         "%.5f",
-                         n, dref.ate_percent, n, dref.rpe_percent);
+                         "%.5f, \"%s_direct_ref_scale\": %.5f",
+                         n, dref.ate_percent, n, dref.rpe_percent, n, dref.scale);
         }
         if (spliced.frames) {
             std::fprintf(f, ", \"%s_direct_to%zu_then_truth_ate_percent\": %.6f", n, splice,

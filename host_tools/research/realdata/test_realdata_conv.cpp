@@ -558,6 +558,13 @@ int main()
     check(std::fabs(s.ate_m - 0.1 * std::sqrt(0.9)) < 1e-12, "ATE = 0.1 sqrt(9/10) m", s.ate_m);
     check(std::fabs(s.rpe_percent - 100.0 * 0.1 / 9.0) < 1e-9, "RPE: one 0.1 m step error",
           s.rpe_percent);
+    check(std::fabs(s.scale - 1.0) < 1e-12, "scale 1 when only x is off", s.scale);
+    std::vector<rprd::Pose> longer = truth;
+    for (rprd::Pose &T : longer) {
+        T.t[2] *= 1.03;
+    }
+    const double sl = rprd::summarise(longer, truth).scale;
+    check(std::fabs(sl - 1.03) < 1e-12, "scale 1.03 of a path 3 % too long", sl);
 
     /* the loaders on synthetic folders: labels, folder names, times, missing images, formats */
     check_loaders_synthetic();
