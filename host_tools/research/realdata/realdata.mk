@@ -43,7 +43,7 @@ $(RD_CONFIG_O): platform/src/rp_config.c platform/include/rigpose/rp_config.h $(
 	$(CC) $(CSTD) $(CORE_WARN) -Wno-format-truncation -D_DEFAULT_SOURCE -Iplatform/include $(INC) \
 	    -O2 -g -DNDEBUG $(RD_DEFS) -c $< -o $@
 RD_LIB_SRC := host_tools/research/realdata/rp_realdata.cpp host_tools/research/realdata/rp_direct.cpp \
-    host_tools/research/realdata/rp_mirror.cpp
+    host_tools/research/realdata/rp_mirror.cpp host_tools/research/realdata/rp_rectify.cpp
 RD_SRC := host_tools/research/realdata/rigpose_realdata.cpp $(RD_LIB_SRC)
 RD_HDR_CORE := $(wildcard core/include/rigpose/*.h platform/include/rigpose/*.h)
 RD_HDR := $(wildcard host_tools/research/realdata/*.hpp) $(RD_HDR_CORE)
@@ -105,7 +105,7 @@ $(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
 	@if [ -d "$(RD_DATA)/kitti00_000-099" ] && [ -d "$(RD_DATA)/euroc_mh01_000-149" ]; then \
 	  $(call RD_RUN,kitti00,$(RD_K00) $(RD_REFS) --splice 14) && \
 	  $(call RD_RUN,kitti00_from14,$(RD_K00) --first 14 $(RD_REFS)) && \
-	  $(call RD_RUN,euroc_mh01,$(RD_EU)) && \
+	  $(call RD_RUN,euroc_mh01,$(RD_EU) $(RD_REFS)) && \
 	  $(call RD_RUN,kitti00_mirror,$(RD_K00) --mirror) && \
 	  $(call RD_RUN,kitti00_from14_mirror,$(RD_K00) --first 14 --mirror) && \
 	  $(call RD_RUN,euroc_mh01_mirror,$(RD_EU) --mirror) && \

@@ -5,8 +5,8 @@ usage: realdata_table.py REALDATA.json
 REALDATA.json is $(BUILD)/bench/realdata.json (rigpose-realdata --json-out of every clip,
 merged). The targets are the ones ../shared/data/README.md states for each clip ("What rigpose
 must do on them"); they live here and nowhere else in the repository. Prints, per clip:
-rigpose's ATE, the yardsticks on the same frames (OpenCV stereo PnP, dense direct; KITTI only:
-they need a rectified pair), the target, whether the target is met, whether rigpose is at or
+rigpose's ATE, the yardsticks on the same frames (OpenCV stereo PnP, dense direct; on a
+rectified copy of a distorted pair, rp_rectify.hpp), the target, whether the target is met, whether rigpose is at or
 below the best yardstick, the trajectory's scale, and the mirrored clip's ATE and its
 difference from the original's (the README's bound: within 10 %). Exit status 0 whatever the
 figures: this is a report, the tests are in make test.
@@ -49,10 +49,10 @@ def main(argv):
         if a is None:
             print(f"| {what} | (not run) | | | | | | | | |")
             continue
-        o = d.get(f"{name}_opencv_ref_ate_percent") if unit == "%" else None
-        r = d.get(f"{name}_direct_ref_ate_percent") if unit == "%" else None
+        o = ate(d, f"{name}_opencv_ref", unit)
+        r = ate(d, f"{name}_direct_ref", unit)
         refs = [v for v in (o, r) if v is not None]
-        best = "-" if not refs else ("yes" if a <= min(refs) else f"no ({min(refs):.3f})")
+        best = "-" if not refs else ("yes" if a <= min(refs) else f"no ({fmt(min(refs), unit)})")
         m = ate(d, mname, unit)
         diff = "-" if m is None else f"{100.0 * (m - a) / a:+.1f} %" + (
             "" if abs(m - a) <= MIRROR_TOL * a else " (over 10 %)")
