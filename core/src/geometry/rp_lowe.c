@@ -6,7 +6,9 @@
  *   min_p  sum_i w_i |uv_i - h_k(p, M_i)|^2,     h_k: rp_rig_project of camera k = obs[i].cam.
  *
  * Each iteration accumulates the 6x6 normal equations H = sum w J^T J, g = sum w J^T r
- * directly (no stacked Jacobian), and solves (H + lambda diag(H)) dp = g by Cholesky.
+ * directly (no stacked Jacobian), and solves (H + lambda diag(H)) dp = g by Cholesky; dp is in
+ * the pose chart of rp_rig.h (translation, world-frame rotation vector) and the step is
+ * p <- p [+] dp (rp_pose_plus), so the problem has no singularity at beta = +-pi/2.
  * Observations behind their camera at the current pose are left out of that evaluation.
  */
 #include "rigpose/rp_lowe.h"
@@ -227,10 +229,10 @@ rp_status_t rp_lowe_solve(const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
         const int small = rp_sqrt(step2) <= prm->tol_step;
 
         rp_real pn[LOWE_NP];
-        for (int i = 0; i < LOWE_NP; ++i) {
-            pn[i] = p[i] + dp[i];
+        st = rp_pose_plus(p, dp, pn);
+        if (st == RP_OK) {
+            st = lowe_eval(rig, obs, n, pn, &trial);
         }
-        st = lowe_eval(rig, obs, n, pn, &trial);
         /* Accept a step that brings more observations in front of their cameras, or keeps
          * the same ones and does not raise the cost; losing observations is a rejection. */
         const int better = st == RP_OK &&
