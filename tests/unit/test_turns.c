@@ -330,9 +330,9 @@ static void layouts_hold_through_the_turn(void **state)
         {"stereo2", 1, sizeof(rp_vo_stereo_t), stereo2_init, stereo_step},
         {"cam1", 1, sizeof(rp_vo_mono_t), cam1_init, mono_step},
         {"gc-filter", 1, sizeof(rp_vo_gc_t), gc_filter_init, gc_step},
-        /* gc as shipped: its window adjustment's pose corrections are up to 10x larger in the
-         * turn than in the pitch and move the rotation by up to 0.8 degrees at once, on main
-         * as here (not the angle chart): printed, not asserted, until that is understood */
+        /* gc as shipped: its window adjustment's pose corrections are much larger in the turn
+         * than in the pitch, on main as here (not the angle chart; host_tools/sim/README.md,
+         * "Turns"): printed, not asserted, until that is understood */
         {"gc", 0, sizeof(rp_vo_gc_t), gc_init, gc_step},
     };
     rp_frameset_t *fs = malloc(sizeof *fs);
