@@ -7,6 +7,7 @@
 
 #include "rp_test.h"
 #include "rigpose/rp_ekf.h"
+#include "rigpose/rp_rot.h"
 #include "rigpose/rp_rig.h"
 #include "rp_sim.h"
 
@@ -59,10 +60,19 @@ static void test_predict_matches_F_P_Ft_plus_Q(void **state)
     memcpy(P, ekf->P, sizeof(P));
     const rp_real dt = RP_C(0.05);
     assert_ok(rp_ekf_predict(ekf, dt));
-    /* reference: F P F^T + Q with explicit matrices */
+    /* reference: F P F^T + Q with explicit matrices; in the chart (rp_ekf.h) the rotation
+     * block of F is Phi = Exp(dt omega), the rest is constant velocity */
+    const rp_real wdt[3] = {dt * x0[9], dt * x0[10], dt * x0[11]};
+    rp_real Phi[9];
+    rp_rot_exp(wdt, Phi);
     double F[N * N] = {0}, FP[N * N] = {0}, ref[N * N] = {0};
     for (int i = 0; i < N; ++i) {
         F[i * N + i] = 1.0;
+    }
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            F[(3 + a) * N + 3 + b] = (double)Phi[3 * a + b];
+        }
     }
     for (int i = 0; i < 6; ++i) {
         F[i * N + 6 + i] = dt;
@@ -84,7 +94,17 @@ static void test_predict_matches_F_P_Ft_plus_Q(void **state)
         assert_near(ekf->P[i], ref[i], RP_TOL(1e-12, 1e-6));
     }
     assert_near(ekf->x[0], 0.1 + 0.05 * 1.0, RP_TOL_TIGHT);
-    assert_near(ekf->x[5], 0.03 + 0.05 * 0.3, RP_TOL_TIGHT);
+    /* R+ = Exp(dt omega) R */
+    rp_real R0[9], R1[9], Rw[9];
+    rp_rot_from_angles(&x0[3], R0);
+    rp_rot_mul(Phi, R0, Rw);
+    rp_rot_from_angles(&ekf->x[3], R1);
+    for (int e = 0; e < 9; ++e) {
+        assert_near(R1[e], Rw[e], RP_TOL_TIGHT);
+    }
+    for (int i = 6; i < N; ++i) {
+        assert_true(ekf->x[i] == x0[i]);
+    }
     assert_status(rp_ekf_predict(ekf, RP_C(0.0)), RP_E_ARG);
     assert_status(rp_ekf_predict(ekf, (rp_real)NAN), RP_E_ARG);
     free(ekf);

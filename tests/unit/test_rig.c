@@ -107,34 +107,67 @@ static void test_rig_check_rejects_bad_rotations_cameras_and_counts(void **state
     assert_status(rp_rig_check(NULL), RP_E_ARG);
 }
 
-static void test_pose_lin_set_holds_rotation_derivatives_and_axes(void **state)
+static void test_pose_lin_set_holds_the_pose_and_its_rotation(void **state)
 {
     (void)state;
     for (int n = 0; n < 20; ++n) {
-        rp_real p[6], R[9], dR[3][9];
+        rp_real p[6], R[9];
         rand_pose(p);
         rp_pose_lin_t pl;
         assert_ok(rp_pose_lin_set(&pl, p));
         rp_rot_from_angles(p + 3, R);
-        rp_rot_angle_derivs(p + 3, dR);
         for (int i = 0; i < 6; ++i) {
             assert_true(pl.p[i] == p[i]);
         }
         for (int e = 0; e < 9; ++e) {
             assert_true(pl.R[e] == R[e]);
         }
+    }
+}
+
+/* The pose chart: p [+] d has translation p + d and rotation Exp(w) R(p); p [-] q inverts it;
+ * at gimbal lock (beta = +-pi/2) the angles it returns still give that rotation exactly. */
+static void test_pose_plus_and_minus_are_the_chart_also_at_gimbal_lock(void **state)
+{
+    (void)state;
+    for (int n = 0; n < 40; ++n) {
+        rp_real p[6], d[6], q[6], back[6], R[9], E[9], Rq[9];
+        rand_pose(p);
+        if (n % 4 == 1) {
+            p[4] = (rp_real)(1.5707963267948966); /* exactly locked */
+        } else if (n % 4 == 2) {
+            p[4] = (rp_real)(-1.5707963267948966 + 1e-3);
+        }
+        for (int i = 0; i < 6; ++i) {
+            d[i] = (rp_real)urand(-0.3, 0.3);
+        }
+        if (n % 4 == 3) {
+            /* a step that lands on beta = +pi/2 from beta = 0 with alpha = gamma = 0 */
+            p[3] = p[4] = p[5] = 0;
+            d[3] = d[5] = 0;
+            d[4] = (rp_real)(1.5707963267948966);
+        }
+        assert_ok(rp_pose_plus(p, d, q));
+        rp_rot_from_angles(p + 3, R);
+        rp_rot_exp(d + 3, E);
+        rp_rot_mul(E, R, R);
+        rp_rot_from_angles(q + 3, Rq);
+        for (int e = 0; e < 9; ++e) {
+            assert_near(Rq[e], R[e], RP_TOL(1e-12, 2e-6));
+        }
         for (int i = 0; i < 3; ++i) {
-            /* dR/d angle_i = [w_i]x R. */
-            const rp_real *w = pl.ax[i];
-            const rp_real W[9] = {0, -w[2], w[1], w[2], 0, -w[0], -w[1], w[0], 0};
-            rp_real WR[9];
-            rp_rot_mul(W, R, WR);
-            for (int e = 0; e < 9; ++e) {
-                assert_true(pl.dR[i][e] == dR[i][e]);
-                assert_near(WR[e], dR[i][e], RP_TOL(1e-14, 1e-6));
-            }
+            assert_near(q[i], p[i] + d[i], RP_TOL(1e-15, 1e-6));
+        }
+        rp_pose_minus(q, p, back);
+        for (int i = 0; i < 6; ++i) {
+            assert_near(back[i], d[i], RP_TOL(1e-9, 2e-4));
         }
     }
+    const rp_real p[6] = {0, 0, 0, 0, 0, 0};
+    rp_real d[6] = {0, 0, 0, 0, 0, 0}, q[6];
+    d[4] = (rp_real)NAN;
+    assert_status(rp_pose_plus(p, d, q), RP_E_NAN);
+    assert_status(rp_pose_plus(NULL, d, q), RP_E_ARG);
 }
 
 static void test_pose_lin_set_rejects_nan(void **state)
@@ -251,17 +284,18 @@ static void test_project_jacobians_match_central_differences(void **state)
                     }
                 }
                 for (int c = 0; c < 6; ++c) {
-                    rp_real pp[6], pm[6], up[2], um[2];
-                    memcpy(pp, p, sizeof pp);
-                    memcpy(pm, p, sizeof pm);
-                    pp[c] = (rp_real)(p[c] + h);
-                    pm[c] = (rp_real)(p[c] - h);
+                    /* column c: d uv / d d_c in the pose chart, p [+] (+-h e_c) */
+                    rp_real pp[6], pm[6], up[2], um[2], dp[6] = {0}, dm[6] = {0};
+                    dp[c] = (rp_real)h;
+                    dm[c] = (rp_real)-h;
+                    assert_ok(rp_pose_plus(p, dp, pp));
+                    assert_ok(rp_pose_plus(p, dm, pm));
                     rp_pose_lin_t lp, lm;
                     assert_ok(rp_pose_lin_set(&lp, pp));
                     assert_ok(rp_pose_lin_set(&lm, pm));
                     assert_ok(rp_rig_project(&rig, k, &lp, M, up, NULL, NULL));
                     assert_ok(rp_rig_project(&rig, k, &lm, M, um, NULL, NULL));
-                    const double step = (double)pp[c] - (double)pm[c];
+                    const double step = (double)dp[c] - (double)dm[c];
                     for (int r = 0; r < 2; ++r) {
                         assert_near(Jp[6 * r + c], ((double)up[r] - (double)um[r]) / step,
                                     tol * scale[r]);
@@ -364,7 +398,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rig_check_accepts_the_six_camera_rig),
         cmocka_unit_test(test_rig_check_rejects_bad_rotations_cameras_and_counts),
-        cmocka_unit_test(test_pose_lin_set_holds_rotation_derivatives_and_axes),
+        cmocka_unit_test(test_pose_lin_set_holds_the_pose_and_its_rotation),
+        cmocka_unit_test(test_pose_plus_and_minus_are_the_chart_also_at_gimbal_lock),
         cmocka_unit_test(test_pose_lin_set_rejects_nan),
         cmocka_unit_test(test_cam_point_follows_eq2),
         cmocka_unit_test(test_at_the_start_cam1_sees_world_coordinates_and_cam3_looks_back),

@@ -595,8 +595,9 @@ static void test_vector_equals_scalar(void **s)
 }
 
 /* Feeding a tracker as rp_pipe does for a pair's second camera: adopted features become tracks
- * at their (Q16-rounded) pixels, only the owner camera's ids survive keep_owned, and the next
- * serial says which ids are born later. */
+ * at their (Q16-rounded) pixels, only the owner camera's ids survive keep_owned, drop_ids takes
+ * out the listed ones (rp_pipe: a pair's new features left unmatched), and the next serial says
+ * which ids are born later. */
 static rp_tracker_t fed;
 
 static void test_feeding_a_tracker(void **s)
@@ -633,6 +634,24 @@ static void test_feeding_a_tracker(void **s)
     assert_ok(rp_track_features(&fed, out, 4, &n));
     assert_int_equal(n, 1);
     assert_int_equal(out[0].id, a.id);
+    /* drop_ids: the listed ids go, the others keep their order; an id not held changes nothing */
+    const rp_feat_t c = {0 + RP_MAX_CAMS * 6, {(rp_real)50.0, (rp_real)60.0}};
+    const rp_feat_t d = {0 + RP_MAX_CAMS * 8, {(rp_real)70.0, (rp_real)80.0}};
+    assert_ok(rp_track_adopt(&fed, &c));
+    assert_ok(rp_track_adopt(&fed, &d));
+    const uint32_t gone[2] = {c.id, b.id}; /* b is no longer held */
+    uint16_t n_dropped = 99;
+    assert_ok(rp_track_drop_ids(&fed, gone, 2, &n_dropped));
+    assert_int_equal(n_dropped, 1);
+    assert_ok(rp_track_features(&fed, out, 4, &n));
+    assert_int_equal(n, 2);
+    assert_int_equal(out[0].id, a.id);
+    assert_int_equal(out[1].id, d.id);
+    assert_true(out[1].uv[0] == d.uv[0] && out[1].uv[1] == d.uv[1]);
+    assert_ok(rp_track_drop_ids(&fed, NULL, 0, NULL));
+    assert_status(rp_track_drop_ids(&fed, NULL, 1, NULL), RP_E_ARG);
+    assert_status(rp_track_drop_ids(NULL, gone, 2, NULL), RP_E_ARG);
+    assert_ok(rp_track_drop_ids(&fed, &d.id, 1, NULL));
     /* full: RP_MAX_FEATS_PER_CAM tracks, the next is refused */
     for (uint32_t i = 1; i < RP_MAX_FEATS_PER_CAM; ++i) {
         rp_feat_t f = a;

@@ -7,6 +7,7 @@
 
 #include "rp_test.h"
 #include "rigpose/rp_vo.h"
+#include "rigpose/rp_rot.h"
 
 static rp_frameset_t fs;
 
@@ -63,9 +64,13 @@ static void test_start_priors(void **state)
     cov[1] = cov[6] = RP_C(2e-5);
     const rp_real dt = RP_C(0.04), s2 = prm.sigma_px * prm.sigma_px;
     assert_ok(rp_vo_ekf_from_pose(&ekf, &prm, p, cov, prev, dt));
+    /* rates in the chart (rp_ekf.h): translation / dt, Log(R(p) R(prev)^T) / dt */
+    rp_real R[9], w[3];
+    rp_rot_from_angles(&p[3], R);
+    rp_rot_log(R, w);
     for (int i = 0; i < 6; ++i) {
         assert_near(ekf.x[i], p[i], RP_TOL_TIGHT);
-        assert_near(ekf.x[6 + i], p[i] / dt, RP_TOL_TIGHT);
+        assert_near(ekf.x[6 + i], (i < 3 ? p[i] : w[i - 3]) / dt, RP_TOL_TIGHT);
         const rp_real s = i < 3 ? RP_VO_START_SIGMA_V : RP_VO_START_SIGMA_W;
         assert_near(ekf.P[(6 + i) * RP_EKF_N + 6 + i], cov[i * 6 + i] * s2 / (dt * dt) + s * s,
                     RP_TOL_TIGHT);

@@ -1,9 +1,15 @@
 /*
  * rp_ekf.h - the 12-state pose EKF of the paper (section 2.1), made numerically careful.
  *
- * State x = [tx ty tz alpha beta gamma | their time derivatives] (m, rad, m/s, rad/s).
- * Plant: constant velocity, x+ = F x with F = [I dt I; 0 I], driven by white acceleration noise
- * (continuous spectral densities q_trans (m^2/s^3) and q_rot (rad^2/s^3)).
+ * State x = [tx ty tz alpha beta gamma | vx vy vz wx wy wz] (m, rad, m/s, rad/s): the pose as
+ * the paper's angles (the representation of the mean), then the velocity and the world-frame
+ * angular rate omega. The covariance P and every increment are in the pose chart of rp_rig.h:
+ * rows/columns 0..2 the translation (m), 3..5 the world-frame rotation vector w of
+ * R = Exp(w) R^ (rad), 6..8 m/s, 9..11 omega (rad/s). It has no singularity where the angles
+ * have one (beta = +-pi/2).
+ * Plant: constant velocity and angular rate, t+ = t + dt v, R+ = Exp(dt omega) R, driven by
+ * white acceleration noise (continuous spectral densities q_trans (m^2/s^3) and q_rot
+ * (rad^2/s^3)); in the chart F = [I dt I; 0 I] diag(I, Exp(dt omega), I, I).
  * Measurement: the pixel of each tracked feature through eqs. (1)-(2) (rp_rig_project).
  * Update: iterated EKF (Gauss-Newton on the posterior, `iterations` relinearisations), computed
  * in information form (the sum of H^T R^-1 H over features is 6x6, whatever their number), so
@@ -71,7 +77,8 @@ typedef struct {
 rp_status_t rp_ekf_init(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real x0[RP_EKF_N],
                         const rp_real P0diag[RP_EKF_N]);
 
-/* Time update over dt seconds (dt > 0, finite; else RP_E_ARG and no change). */
+/* Time update over dt seconds (dt > 0, finite; else RP_E_ARG and no change; RP_E_NAN and no
+ * change for a non-finite pose or rate). */
 rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt);
 
 /* Measurement update with n observations. `used` (n bytes, may be NULL) receives 1 for each

@@ -43,8 +43,13 @@ typedef struct {
     int64_t utime;              /* time of the frame set, microseconds */
     uint32_t frame;             /* frame index since start */
     rp_real p[6];               /* pose [tx ty tz alpha beta gamma] of cam1 in the world, m, rad */
-    rp_real v[6];               /* its time derivative, m/s and rad/s */
-    rp_real cov[36];            /* 6x6 covariance of p, row-major */
+    rp_real v[6];               /* velocity of cam1 (m/s, world frame), then its angular
+                                 * rate omega (rad/s, world frame: R' = [omega]x R), not the
+                                 * angles' derivatives */
+    rp_real cov[36];            /* 6x6 covariance of p, row-major, in rp_rig.h's pose chart:
+                                 * translation (m), then the world-frame rotation vector w of
+                                 * R = Exp(w) R(p) (rad); not of the angles, which are singular
+                                 * at beta = +-pi/2 */
     uint32_t flags;             /* RP_EST_* */
     uint16_t n_used[RP_MAX_CAMS]; /* features used in the update, per camera */
     uint16_t n_gated;           /* measurements rejected by the gate */

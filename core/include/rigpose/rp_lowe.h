@@ -24,7 +24,8 @@ rp_lowe_params_t rp_lowe_default_params(void);
 /* Refine pose p (in: start, out: estimate) minimising the weighted reprojection error of the
  * n observations. prm may be NULL (defaults). rms_px (may be NULL): final weighted RMS residual
  * per pixel coordinate, pixels (about sigma_px when the residuals are the noise). cov (may be
- * NULL): 6x6 covariance of p for unit pixel noise (scale by sigma^2). Observations with w = 0,
+ * NULL): 6x6 covariance of p for unit pixel noise (scale by sigma^2), in the pose chart of rp_rig.h
+ * (translation, then the world-frame rotation vector). Observations with w = 0,
  * or behind their camera at the current pose, are left out.
  * RP_E_TOO_FEW (n < 3, or fewer than 3 usable observations), RP_E_SINGULAR (geometry does not
  * fix the pose), RP_E_NO_CONVERGE (iteration limit; p holds the best pose found, rms_px and cov

@@ -19,8 +19,10 @@
  * features it was given by the matcher, which keep the left feature's id. Whenever the left
  * tracker creates features (the first frame, every top-up), the new ones are matched into the
  * right image of the same frame set (rp_smatch) and the matches are handed to the right
- * tracker. So at every frame set the two cameras of a pair share the ids of every feature that
- * was matched at its birth and is still tracked in both; the stereo estimator triangulates
+ * tracker; a new left feature without a match is dropped from the left tracker at once (it
+ * would give the estimator nothing and hold its cell against the next top-up). So at every
+ * frame set the two cameras of a pair share the ids of every feature that was matched at its
+ * birth and is still tracked in both; the stereo estimator triangulates
  * these whenever it (re-)initialises (its backtracking uses the previous frame set, which
  * carries them too). Matching costs only at births, not every frame.
  *
@@ -141,6 +143,7 @@ typedef struct {
     int64_t last_utime;
     rp_feat_t scratch_a[RP_MAX_FEATS_PER_CAM]; /* new left features to match */
     rp_feat_t scratch_b[RP_MAX_FEATS_PER_CAM]; /* their matches */
+    uint32_t drop_ids[RP_MAX_FEATS_PER_CAM];  /* scratch: new left features left unmatched */
 } rp_pipe_t;
 
 /* Name of a layout ("stereo4", "stereo2", "gc", "cam1".."cam4", "rc"); "?" if out of range. */

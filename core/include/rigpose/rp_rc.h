@@ -3,9 +3,11 @@
  * (r_kj, l_kj) of single cameras of a rig into one rig pose.
  *
  *  - Rotation: each camera's rotation is brought back to the rig frame by the change of basis
- *    R_kj = R_k r_kj R_k^T (eq. 3); the rig's angles are the per-angle medians over the cameras
- *    (the median of an even count is the mean of the middle two; angles are unwrapped around the
- *    reference camera's before sorting).
+ *    R_kj = R_k r_kj R_k^T (eq. 3); the rig's rotation is the per-axis median over the cameras
+ *    in rp_rig.h's chart at the reference camera's R_1j (w_k = Log(R_kj R_1j^T), R_j =
+ *    Exp(median w) R_1j; the median of an even count is the mean of the middle two). The
+ *    paper's per-angle median is the same near the identity, but not defined near
+ *    beta = +-pi/2, where nearby rotations have far-apart alpha and gamma.
  *  - Translation: with d_j = l_1j, the reference camera's own translation, and R_j the fused
  *    rotation, each other camera k gives three equations S_j d_j - S_kj R_k l_kj = (I - R_j) D_k
  *    (eq. 5); stacked they are A s = b (eq. 6: 9x4 for the paper's four cameras), solved in the

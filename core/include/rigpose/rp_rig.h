@@ -28,15 +28,23 @@ typedef struct {
     rp_rig_cam_t cam[RP_MAX_CAMS];
 } rp_rig_t;
 
-/* A pose prepared for linearisation: p, R_j and dR_j/d(angles), computed once per pose and
- * reused for every feature. */
+/* A pose prepared for linearisation: p and R_j, computed once per pose and reused for every
+ * feature. */
 typedef struct {
     rp_real p[6];     /* [tx ty tz alpha beta gamma], m and rad */
     rp_real R[9];     /* R_j */
-    rp_real dR[3][9]; /* dR_j / d alpha, d beta, d gamma */
-    rp_real ax[3][3]; /* world-frame axes w_i with dR_j/d(angle i) = [w_i]x R_j: R_j e_x,
-                         Rz(gamma) e_y, e_z (rp_rig_project's Jacobian uses these) */
 } rp_pose_lin_t;
+
+/* The estimators' pose chart. The angles are the representation of the mean only; every
+ * Jacobian, increment, difference and covariance of a pose is in the minimal local chart
+ * d = [dt; w]: translation d_j + dt (m, world frame) and rotation Exp(w) R_j (w a world-frame
+ * rotation vector, rad), which has no singularity, unlike the angles at beta = +-pi/2.
+ * rp_pose_plus: out = p [+] d. RP_E_NAN for non-finite input; out may alias p or d. */
+rp_status_t rp_pose_plus(const rp_real p[6], const rp_real d[6], rp_real out[6]);
+
+/* rp_pose_minus: d = a [-] b, so that a = b [+] d: d[0..2] = a - b (m), d[3..5] =
+ * Log(R(a) R(b)^T) (rad, |.| <= pi), the same for every angle triple of the same rotations. */
+void rp_pose_minus(const rp_real a[6], const rp_real b[6], rp_real d[6]);
 
 /* RP_OK if the rig is usable: 1..RP_MAX_CAMS cameras, each rp_cam_check OK, each R_k a
  * rotation (orthonormal to 1e-6, det +1), finite D_k. Else RP_E_ARG or RP_E_NAN. */
@@ -54,7 +62,8 @@ rp_status_t rp_rig_world_point(const rp_rig_t *rig, uint8_t k, const rp_pose_lin
                                const rp_real P[3], rp_real M[3]);
 
 /* Pixel uv of world point M in camera k at pose pl, with the analytic Jacobians
- * J_pose (2x6 row-major, d uv / d p) and J_M (2x3, d uv / d M), each may be NULL.
+ * J_pose (2x6 row-major, d uv / d d, d in the pose chart above: translation, then the world-
+ * frame rotation vector w of R_j <- Exp(w) R_j) and J_M (2x3, d uv / d M), each may be NULL.
  * RP_E_BEHIND if the point is behind camera k, RP_E_NAN, RP_E_ARG. No image-bounds check. */
 rp_status_t rp_rig_project(const rp_rig_t *rig, uint8_t k, const rp_pose_lin_t *pl,
                            const rp_real M[3], rp_real uv[2], rp_real J_pose[12],

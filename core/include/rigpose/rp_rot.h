@@ -24,6 +24,16 @@ void rp_rot_from_angles(const rp_real abg[3], rp_real R[9]);
  * RP_E_NAN if R has a non-finite element. */
 rp_status_t rp_rot_to_angles(const rp_real R[9], rp_real abg[3]);
 
+/* The estimators' rotation chart (singularity-free, unlike the angles at beta = +-pi/2): a
+ * rotation near R(abg) is R(out) = Exp(w) R(abg), w a world-frame rotation vector (rad).
+ * Box-plus: out = angles of Exp(w) R(abg) (rp_rot_to_angles' choice at gimbal lock, which
+ * reproduces the rotation). RP_E_NAN for non-finite input; out may alias abg. */
+rp_status_t rp_angles_plus(const rp_real abg[3], const rp_real w[3], rp_real out[3]);
+
+/* Box-minus: w = Log(R(a) R(b)^T), so that R(a) = Exp(w) R(b), |w| in [0, pi]; w is the same
+ * for every angle triple of the same two rotations. */
+void rp_angles_minus(const rp_real a[3], const rp_real b[3], rp_real w[3]);
+
 /* Derivatives of R(abg) with respect to alpha, beta and gamma: dR[i] = dR/d(abg[i]). */
 void rp_rot_angle_derivs(const rp_real abg[3], rp_real dR[3][9]);
 

@@ -18,7 +18,11 @@
  *      curve in camera a must land within lr_max_px of the left feature;
  *   3. sub-pixel: parabola through the scores around the best step, then a 1-D Lucas-Kanade
  *      refinement along the curve's direction (mean-removed patches, bilinear weights Q14,
- *      intensities Q5, int64 sums), at most subpix_iter iterations;
+ *      intensities Q5, int64 sums), at most subpix_iter iterations, then a 2-D one from there
+ *      (gain-normalised, at most 2 subpix_iter iterations; the 1-D match stays if it leaves
+ *      1.5 px or the window is an edge): a match along the curve alone takes the calibration's
+ *      error across the curve up as a shift along it, e cot theta on an edge slanted by theta,
+ *      whose sign a mirror image flips;
  *   4. the refined match passes the symmetric epipolar check (rp_stereo_epipolar_px) within
  *      max_epipolar_px.
  * A matched feature of camera b carries the SAME id as the feature of camera a (the stereo
@@ -54,8 +58,10 @@ typedef struct {
     rp_real lr_max_px;        /* left-right consistency tolerance, px (1.0) */
     rp_real max_epipolar_px;  /* final epipolar check, px (1.0) */
     uint8_t subpix_iter;      /* 1-D LK iterations after the parabola fit, 0 = parabola only (5) */
-    uint8_t search_level;     /* pyramid level of the coarse search (1; 0 = full resolution;
-                               * clipped to the pyramids' levels) */
+    uint8_t search_level;     /* pyramid level of the coarse search (0 = full resolution, the
+                               * default: a coarser level's pixel centres are not a mirror
+                               * image's when the width is even, and its half-size windows pick
+                               * other peaks; clipped to the pyramids' levels) */
 } rp_smatch_cfg_t;
 
 /* Counts of one rp_smatch_pair call: every input feature ends in exactly one bucket. */

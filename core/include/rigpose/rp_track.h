@@ -164,6 +164,11 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
  * RP_E_ARG (NULL trk, owner >= RP_MAX_CAMS). */
 rp_status_t rp_track_keep_owned(rp_tracker_t *trk, uint8_t owner, uint16_t *n_kept);
 
+/* Drops the tracks whose id is one of ids[0..n_ids-1] (the others keep their order); *n_dropped
+ * (may be NULL) gets how many went. RP_E_ARG (NULL trk, or NULL ids with n_ids > 0). */
+rp_status_t rp_track_drop_ids(rp_tracker_t *trk, const uint32_t *ids, uint16_t n_ids,
+                              uint16_t *n_dropped);
+
 /* Adopts feature f, found in the tracker's current image by other means (a stereo match), as a
  * track with f's id at f's pixel (rounded to Q16); the next rp_track_process tracks it.
  * RP_E_FULL (RP_MAX_FEATS_PER_CAM tracks held: nothing added), RP_E_NAN (non-finite pixel),

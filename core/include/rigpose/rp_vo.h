@@ -11,8 +11,10 @@
  *    (RP_VO_START_SIGMA_V, RP_VO_START_SIGMA_W);
  *  - from a pose (rp_vo_ekf_from_pose): at the second frame set, the pose p that Lowe's method
  *    found with its covariance sigma_px^2 cov (cov per unit pixel variance, as rp_lowe_solve
- *    gives it), and the velocity (p - p_prev) / dt with variance diag(cov) sigma_px^2 / dt^2
- *    plus the start sigma^2. The pose block keeps Lowe's full covariance.
+ *    gives it, in rp_rig.h's pose chart), and the rates (p [-] p_prev) / dt (translation
+ *    difference; world-frame rotation vector Log(R R_prev^T) over dt) with variance
+ *    diag(cov) sigma_px^2 / dt^2 plus the start sigma^2. The pose block keeps Lowe's full
+ *    covariance.
  */
 #ifndef RP_VO_H
 #define RP_VO_H

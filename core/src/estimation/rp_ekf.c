@@ -1,21 +1,26 @@
 /*
  * rp_ekf.c - the 12-state pose EKF (paper section 2.1), iterated, in a numerically careful form.
  *
- * Notation: x = [p; v], p the pose (6), v its derivative (6); P = [Ppp Ppv; Pvp Pvv].
+ * Notation: x = [p; v], p the pose (6), v its rate (6); P = [Ppp Ppv; Pvp Pvv], in the pose
+ * chart of rp_rig.h (d = [dt; w], R = Exp(w) R^): the angles of x are the mean's
+ * representation, never differentiated nor added to.
  * The measurements see only p, so the update is a 6-dimensional problem with prior (p0, Ppp):
- *   minimise (p - p0)^T Ppp^-1 (p - p0) + sum_i w_i/s^2 |z_i - h_i(p)|^2.
- * Gauss-Newton at iterate p_k, with A = sum J^T W J and b = sum J^T W (r + J (p_k - p0)):
- *   p_{k+1} = p0 + (Ppp^-1 + A)^-1 b.
+ *   minimise d^T Ppp^-1 d + sum_i w_i/s^2 |z_i - h_i(p0 [+] d)|^2.
+ * Gauss-Newton at iterate d_k, with A = sum J^T W J and b = sum J^T W (r + J d_k), J the
+ * Jacobian in the chart at p0 [+] d_k (the chart's own Jacobian between d_k and a step at the
+ * iterate, I + O(|w_k|), is taken as I: |w_k| is the update's size, a few mrad):
+ *   d_{k+1} = (Ppp^-1 + A)^-1 b,   p_{k+1} = p0 [+] d_{k+1}.
  * With Ppp = L L^T and S = I + L^T A L (S >= I: well conditioned even in float),
  *   (Ppp^-1 + A)^-1 = L S^-1 L^T = Ppp+                                      (posterior pose cov)
- * The velocity follows by conditioning on the pose posterior, with M = Ppp^-1 Ppv:
- *   v+ = v0 + M^T (p+ - p0),   Ppv+ = Ppp+ M,   Pvv+ = Pvv - M^T (Ppp - Ppp+) M.
+ * The rate follows by conditioning on the pose posterior, with M = Ppp^-1 Ppv:
+ *   v+ = v0 + M^T d,   Ppv+ = Ppp+ M,   Pvv+ = Pvv - M^T (Ppp - Ppp+) M.
  */
 #include <string.h>
 
 #include "priv/rp_math.h"
 #include "rigpose/rp_ekf.h"
 #include "rigpose/rp_linalg.h"
+#include "rigpose/rp_rot.h"
 
 #define N RP_EKF_N
 #define NP 6
@@ -98,9 +103,43 @@ rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt)
     }
     rp_real *x = ekf->x;
     rp_real *P = ekf->P;
-    /* x+ = F x, F = [I dt*I; 0 I] */
-    for (int i = 0; i < NP; ++i) {
+    /* Translation t+ = t + dt v; rotation R+ = Exp(dt omega) R (omega: world-frame angular
+     * rate, rad/s, the chart of rp_rig.h). */
+    const rp_real wdt[3] = {dt * x[9], dt * x[10], dt * x[11]};
+    rp_real ang[3], Phi[9];
+    const rp_status_t st = rp_angles_plus(x + 3, wdt, ang);
+    if (st != RP_OK) {
+        return st;
+    }
+    for (int i = 0; i < 3; ++i) {
         x[i] += dt * x[NP + i];
+        x[3 + i] = ang[i];
+    }
+    /* In the chart, R = Exp(e) R^ and omega = omega^ + e_w give, to first order,
+     * e+ = Phi e + dt e_w with Phi = Exp(dt omega^) (Exp(dt omega) Exp(e) Exp(-dt omega) =
+     * Exp(Phi e); the left Jacobian of Exp(dt omega) on dt e_w is I + O(dt |omega|)). So
+     * F = F_cv G with G = diag(I, Phi, I, I) and F_cv = [I dt*I; 0 I]: first P <- G P G^T
+     * (rows, then columns 3..5 times Phi), then F_cv below. */
+    rp_rot_exp(wdt, Phi);
+    for (int j = 0; j < N; ++j) { /* rows 3..5 <- Phi rows 3..5 */
+        rp_real t[3];
+        for (int a = 0; a < 3; ++a) {
+            t[a] = Phi[3 * a] * P[3 * N + j] + Phi[3 * a + 1] * P[4 * N + j] +
+                   Phi[3 * a + 2] * P[5 * N + j];
+        }
+        for (int a = 0; a < 3; ++a) {
+            P[(3 + a) * N + j] = t[a];
+        }
+    }
+    for (int i = 0; i < N; ++i) { /* columns 3..5 <- columns 3..5 Phi^T */
+        rp_real t[3];
+        for (int a = 0; a < 3; ++a) {
+            t[a] = Phi[3 * a] * P[i * N + 3] + Phi[3 * a + 1] * P[i * N + 4] +
+                   Phi[3 * a + 2] * P[i * N + 5];
+        }
+        for (int a = 0; a < 3; ++a) {
+            P[i * N + 3 + a] = t[a];
+        }
     }
     /* P+ = F P F^T + Q, by blocks: Ppp += dt (Ppv + Pvp) + dt^2 Pvv; Ppv += dt Pvv. */
     for (int i = 0; i < NP; ++i) {
@@ -238,7 +277,8 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
         return RP_E_DIVERGED;
     }
 
-    rp_real p[NP];          /* current iterate */
+    rp_real p[NP];          /* current iterate, p = x0 [+] dp (rp_rig.h's chart) */
+    rp_real dp[NP] = {0};
     memcpy(p, x0, sizeof(p));
     memcpy(Cpost, Ppp, sizeof(Cpost)); /* covariance used by the gate */
     uint16_t n_used = 0, n_gated = 0, n_bad = 0, n_outside = 0;
@@ -251,10 +291,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
             info->cov_reset = 1;
             return RP_E_DIVERGED;
         }
-        rp_real A[36] = {0}, b[NP] = {0}, dp[NP];
-        for (int i = 0; i < NP; ++i) {
-            dp[i] = p[i] - x0[i];
-        }
+        rp_real A[36] = {0}, b[NP] = {0};
         /* Gate against the current estimate and covariance. If that rejects more features
          * than it keeps, the estimate is still poor (a bad prior, or an iteration not yet
          * converged: residuals are linearisation error, not noise), so this iteration keeps
@@ -348,7 +385,12 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
             for (int j = 0; j < NP; ++j) {
                 acc += Cpost[i * NP + j] * b[j];
             }
-            p[i] = x0[i] + acc;
+            dp[i] = acc;
+        }
+        if (rp_pose_plus(x0, dp, p) != RP_OK) {
+            reset_covariance(ekf, P0);
+            info->cov_reset = 1;
+            return RP_E_DIVERGED;
         }
     }
 
@@ -375,7 +417,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
         x_new[i] = p[i];
         rp_real acc = RP_C(0.0);
         for (int k = 0; k < NP; ++k) {
-            acc += M[k * NP + i] * (p[k] - x0[k]);
+            acc += M[k * NP + i] * dp[k];
         }
         x_new[NP + i] = x0[NP + i] + acc;
     }

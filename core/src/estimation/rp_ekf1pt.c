@@ -276,9 +276,12 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         }
         const rp_real r[2] = {obs[i].uv[0] - uv[0], obs[i].uv[1] - uv[1]};
         const rp_real g[2] = {Si[0] * r[0] + Si[1] * r[1], Si[2] * r[0] + Si[3] * r[1]};
-        rp_real p[NP];
+        rp_real p[NP], d[NP]; /* p = p0 [+] d, the chart of rp_rig.h */
         for (int a = 0; a < NP; ++a) {
-            p[a] = p0[a] + CJt[a * 2] * g[0] + CJt[a * 2 + 1] * g[1];
+            d[a] = CJt[a * 2] * g[0] + CJt[a * 2 + 1] * g[1];
+        }
+        if (rp_pose_plus(p0, d, p) != RP_OK) {
+            continue;
         }
         const uint32_t c = support(s, rig, obs, n, p, thr2, n_ok, best);
         if (c > best) {

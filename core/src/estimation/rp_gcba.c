@@ -116,6 +116,50 @@ static void pose_real(const double x[6], rp_real p[6])
     }
 }
 
+/* x <- x [+] d in double (rp_rig.h's pose chart: t + dt, Exp(w) R): R(x) from the angles,
+ * Exp(w) by Rodrigues, the angles back as rp_rot_to_angles takes them (alpha = 0 at gimbal
+ * lock, alpha from row 1 of Rz(gamma)^T R elsewhere, so that R is reproduced). */
+static void pose_plus_d(double x[6], const double d[6])
+{
+    const double ca = cos(x[3]), sa = sin(x[3]), cb = cos(x[4]), sb = sin(x[4]);
+    const double cg = cos(x[5]), sg = sin(x[5]);
+    const double R[9] = {cg * cb, cg * sb * sa - sg * ca, cg * sb * ca + sg * sa,
+                         sg * cb, sg * sb * sa + cg * ca, sg * sb * ca - cg * sa,
+                         -sb,     cb * sa,                cb * ca};
+    const double *w = d + 3;
+    const double t2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2], t = rp_sqrt_d(t2);
+    double a = 1.0 - t2 / 6.0, b = 0.5 - t2 / 24.0; /* sin t / t, (1 - cos t) / t^2 */
+    if (t >= 1e-4) {
+        const double sh = sin(0.5 * t);
+        a = sin(t) / t;
+        b = 2.0 * sh * sh / t2;
+    }
+    const double E[9] = {1.0 - b * (w[1] * w[1] + w[2] * w[2]), -a * w[2] + b * w[0] * w[1],
+                         a * w[1] + b * w[0] * w[2],            a * w[2] + b * w[0] * w[1],
+                         1.0 - b * (w[0] * w[0] + w[2] * w[2]), -a * w[0] + b * w[1] * w[2],
+                         -a * w[1] + b * w[0] * w[2],           a * w[0] + b * w[1] * w[2],
+                         1.0 - b * (w[0] * w[0] + w[1] * w[1])};
+    double Q[9];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            Q[3 * i + j] = E[3 * i] * R[j] + E[3 * i + 1] * R[3 + j] + E[3 * i + 2] * R[6 + j];
+        }
+    }
+    const double c = rp_sqrt_d(Q[0] * Q[0] + Q[3] * Q[3]);
+    x[4] = atan2(-Q[6], c);
+    if (c < 1e-9) {
+        x[3] = 0.0;
+        x[5] = atan2(-Q[1], Q[4]);
+    } else {
+        const double g = atan2(Q[3], Q[0]), cg2 = cos(g), sg2 = sin(g);
+        x[3] = atan2(sg2 * Q[2] - cg2 * Q[5], cg2 * Q[4] - sg2 * Q[1]);
+        x[5] = g;
+    }
+    for (int i = 0; i < 3; ++i) {
+        x[i] += d[i];
+    }
+}
+
 /* Ray of observation o at keyframe pose x: origin c and unit direction w (world, m). */
 static rp_status_t obs_ray(const rp_rig_t *rig, const double x[6], const rp_gcba_obs_t *o,
                            double c[3], double w[3])
@@ -475,9 +519,7 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
     memcpy(ba->ok0, ba->lm_ok, n_lm);
     back_substitute(ba, rig, n_lm, nk, cfg);
     for (int k = 1; k < nk; ++k) {
-        for (int a = 0; a < 6; ++a) {
-            ba->x[k][a] += ba->dx[6 * (k - 1) + a];
-        }
+        pose_plus_d(ba->x[k], &ba->dx[6 * (k - 1)]);
     }
     uint16_t n2 = 0;
     double sq2 = 0.0;

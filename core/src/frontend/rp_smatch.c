@@ -295,6 +295,12 @@ static int search(rp_smatch_t *sm, const dir_t *g, const rp_pyr_t *src, const rp
     if (best < 0) {
         return MISS_OUTSIDE;
     }
+    /* a best sample at an end of the part of the curve inside the image is no peak: the true
+     * match may lie beyond the border, and its window is cut there */
+    if (best == 0 || best == n - 1 || sm->score[best - 1] == SCORE_NONE ||
+        sm->score[best + 1] == SCORE_NONE) {
+        return MISS_OUTSIDE;
+    }
     /* hopeless already at the coarse level: under min - (1 - min) (0.6 for 0.8) */
     if ((int32_t)sm->score[best] < 2 * (int32_t)cfg->min_zncc_q15 - 32767) {
         return MISS_LOW;
@@ -396,6 +402,71 @@ static void refine_1d(const rp_pyr_t *dst, hit_t *hit, int iters)
     hit->uv[1] += s * hit->dir[1];
 }
 
+/* 2-D Lucas-Kanade of the match: minimises sum (R(x + s) - mean_R - g (T - mean_T))^2 over
+ * s = (su, sv), g = sd_R / sd_T (gain), the image gradient from windows sampled at +-1 px in u
+ * and v. At most `iters` steps, each clamped to 1 px, |s| <= 1.5 px per axis. Unlike a search
+ * along the epipolar curve alone, the match does not take up the calibration's error across
+ * the curve as a shift along it (on an edge slanted by theta, a curve off by e across it moves
+ * a 1-D match by e cot theta along it). Returns 0 if it left the image or diverged (hit
+ * unchanged). */
+static int refine_2d(const rp_pyr_t *dst, hit_t *hit, int iters)
+{
+    const lev_t d0 = level_of(dst, 0);
+    const win_t *T = &hit->T0;
+    const int hw = T->hw;
+    win_t R, Ru, Rl, Rd, Rt;
+    rp_real su = RP_C(0.0), sv = RP_C(0.0);
+    for (int it = 0; it < iters; ++it) {
+        const rp_real x = hit->uv[0] + su, y = hit->uv[1] + sv;
+        if (!win_sample(&d0, to_q16(x), to_q16(y), hw, &R) ||
+            !win_sample(&d0, to_q16(x + RP_C(1.0)), to_q16(y), hw, &Ru) ||
+            !win_sample(&d0, to_q16(x - RP_C(1.0)), to_q16(y), hw, &Rl) ||
+            !win_sample(&d0, to_q16(x), to_q16(y + RP_C(1.0)), hw, &Rd) ||
+            !win_sample(&d0, to_q16(x), to_q16(y - RP_C(1.0)), hw, &Rt) ||
+            !(R.sd > RP_C(0.0)) || !(T->sd > RP_C(0.0))) {
+            return 0;
+        }
+        const rp_real gain = R.sd / T->sd;
+        const rp_real mR = (rp_real)R.s / (rp_real)R.n, mT = (rp_real)T->s / (rp_real)T->n;
+        int64_t sgu = 0, sgv = 0;
+        for (int i = 0; i < R.n; ++i) {
+            sgu += (int32_t)Ru.v[i] - Rl.v[i];
+            sgv += (int32_t)Rd.v[i] - Rt.v[i];
+        }
+        const rp_real mgu = (rp_real)sgu / (rp_real)(2 * R.n);
+        const rp_real mgv = (rp_real)sgv / (rp_real)(2 * R.n);
+        rp_real a = RP_C(0.0), b = RP_C(0.0), c = RP_C(0.0), eu = RP_C(0.0), ev = RP_C(0.0);
+        for (int i = 0; i < R.n; ++i) {
+            const rp_real gu = RP_C(0.5) * (rp_real)((int32_t)Ru.v[i] - Rl.v[i]) - mgu;
+            const rp_real gv = RP_C(0.5) * (rp_real)((int32_t)Rd.v[i] - Rt.v[i]) - mgv;
+            const rp_real e = ((rp_real)R.v[i] - mR) - gain * ((rp_real)T->v[i] - mT);
+            a += gu * gu;
+            b += gu * gv;
+            c += gv * gv;
+            eu += gu * e;
+            ev += gv * e;
+        }
+        const rp_real det = a * c - b * b;
+        if (!(det > RP_C(1e-6) * (a * c)) || !(det > RP_C(0.0))) {
+            return 0; /* an edge: the window fixes one direction only */
+        }
+        rp_real du = -(c * eu - b * ev) / det, dv = -(a * ev - b * eu) / det;
+        du = du > RP_C(1.0) ? RP_C(1.0) : (du < RP_C(-1.0) ? RP_C(-1.0) : du);
+        dv = dv > RP_C(1.0) ? RP_C(1.0) : (dv < RP_C(-1.0) ? RP_C(-1.0) : dv);
+        su += du;
+        sv += dv;
+        if (rp_fabs(su) > RP_C(1.5) || rp_fabs(sv) > RP_C(1.5)) {
+            return 0;
+        }
+        if (rp_fabs(du) < RP_C(0.01) && rp_fabs(dv) < RP_C(0.01)) {
+            break;
+        }
+    }
+    hit->uv[0] += su;
+    hit->uv[1] += sv;
+    return 1;
+}
+
 /* ---- public -------------------------------------------------------------------------------- */
 
 rp_status_t rp_smatch_default_cfg(rp_smatch_cfg_t *cfg)
@@ -413,7 +484,7 @@ rp_status_t rp_smatch_default_cfg(rp_smatch_cfg_t *cfg)
     cfg->lr_max_px = RP_C(1.0);
     cfg->max_epipolar_px = RP_C(1.0);
     cfg->subpix_iter = 5;
-    cfg->search_level = 1;
+    cfg->search_level = 0;
     return RP_OK;
 }
 
@@ -491,6 +562,7 @@ rp_status_t rp_smatch_pair(rp_smatch_t *sm, const rp_rig_t *rig, const rp_stereo
         int r = search(sm, &fw, pyr_a, pyr_b, lv, fa[k].uv, &h);
         if (r == HIT) {
             refine_1d(pyr_b, &h, sm->cfg.subpix_iter);
+            (void)refine_2d(pyr_b, &h, 2 * sm->cfg.subpix_iter); /* 0: the 1-D match stays */
             const int rb = search(sm, &bw, pyr_b, pyr_a, lv, h.uv, &back);
             const rp_real dx = back.uv[0] - fa[k].uv[0], dy = back.uv[1] - fa[k].uv[1];
             if (rb != HIT || !(dx * dx + dy * dy <= sm->cfg.lr_max_px * sm->cfg.lr_max_px)) {

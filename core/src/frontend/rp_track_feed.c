@@ -29,6 +29,32 @@ rp_status_t rp_track_keep_owned(rp_tracker_t *trk, uint8_t owner, uint16_t *n_ke
     return RP_OK;
 }
 
+rp_status_t rp_track_drop_ids(rp_tracker_t *trk, const uint32_t *ids, uint16_t n_ids,
+                              uint16_t *n_dropped)
+{
+    if (trk == NULL || (n_ids > 0 && ids == NULL)) {
+        return RP_E_ARG;
+    }
+    uint16_t m = 0;
+    for (uint16_t i = 0; i < trk->n; ++i) {
+        uint16_t j = 0;
+        while (j < n_ids && ids[j] != trk->id[i]) {
+            ++j;
+        }
+        if (j == n_ids) {
+            trk->id[m] = trk->id[i];
+            trk->pos_q16[m][0] = trk->pos_q16[i][0];
+            trk->pos_q16[m][1] = trk->pos_q16[i][1];
+            ++m;
+        }
+    }
+    if (n_dropped != NULL) {
+        *n_dropped = (uint16_t)(trk->n - m);
+    }
+    trk->n = m;
+    return RP_OK;
+}
+
 rp_status_t rp_track_adopt(rp_tracker_t *trk, const rp_feat_t *f)
 {
     if (trk == NULL || f == NULL) {

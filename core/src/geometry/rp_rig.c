@@ -6,8 +6,12 @@
  * h_r = R_j R_k j_r (the world-frame gradient of uv_r with respect to M):
  *   d uv_r / d M     =  h_r^T
  *   d uv_r / d d_j   = -h_r^T
- *   d uv_r / d ang_i =  j_r . R_k^T (dR_j/d ang_i)^T m  =  w_i . (h_r x m),
- * because dR_j/d ang_i = [w_i]x R_j (rp_pose_lin_t.ax) and [w]x^T m = m x w.
+ *   d uv_r / d w     =  h_r x m,
+ * w the world-frame rotation vector of the pose chart (rp_rig.h: R_j <- Exp(w) R_j, so
+ * dR_j = [dw]x R_j, d(R_j^T m) = R_j^T [dw]x^T m = R_j^T (m x dw), and
+ * j_r . R_k^T R_j^T (m x dw) = h_r . (m x dw) = dw . (h_r x m)). Unlike the derivatives in the
+ * paper's angles (w_i . (h_r x m) with w_beta = Rz(gamma) e_y parallel to R_j e_x at
+ * beta = +-pi/2), these three columns never lose rank.
  */
 #include "rigpose/rp_rig.h"
 
@@ -84,18 +88,34 @@ rp_status_t rp_pose_lin_set(rp_pose_lin_t *pl, const rp_real p[6])
         pl->p[i] = p[i];
     }
     rp_rot_from_angles(p + 3, pl->R);
-    rp_rot_angle_derivs(p + 3, pl->dR);
-    const rp_real cg = rp_cos(p[5]), sg = rp_sin(p[5]);
-    pl->ax[0][0] = pl->R[0];
-    pl->ax[0][1] = pl->R[3];
-    pl->ax[0][2] = pl->R[6];
-    pl->ax[1][0] = -sg;
-    pl->ax[1][1] = cg;
-    pl->ax[1][2] = RP_C(0.0);
-    pl->ax[2][0] = RP_C(0.0);
-    pl->ax[2][1] = RP_C(0.0);
-    pl->ax[2][2] = RP_C(1.0);
     return RP_OK;
+}
+
+rp_status_t rp_pose_plus(const rp_real p[6], const rp_real d[6], rp_real out[6])
+{
+    if (p == NULL || d == NULL || out == NULL) {
+        return RP_E_ARG;
+    }
+    rp_real ang[3];
+    const rp_status_t st = rp_angles_plus(p + 3, d + 3, ang);
+    if (st != RP_OK) {
+        return st;
+    }
+    for (int i = 0; i < 3; ++i) {
+        out[i] = p[i] + d[i];
+        out[3 + i] = ang[i];
+    }
+    return RP_OK;
+}
+
+void rp_pose_minus(const rp_real a[6], const rp_real b[6], rp_real d[6])
+{
+    rp_real w[3];
+    rp_angles_minus(a + 3, b + 3, w);
+    for (int i = 0; i < 3; ++i) {
+        d[i] = a[i] - b[i];
+        d[3 + i] = w[i];
+    }
 }
 
 /* P = R_k^T (R_j^T m - D_k), m = M - d_j (eq. 2); also returns m. */
@@ -190,10 +210,9 @@ rp_status_t rp_rig_project(const rp_rig_t *rig, uint8_t k, const rp_pose_lin_t *
             row[0] = -h[0];
             row[1] = -h[1];
             row[2] = -h[2];
-            for (int i = 0; i < 3; ++i) {
-                const rp_real *w = pl->ax[i];
-                row[3 + i] = w[0] * hm0 + w[1] * hm1 + w[2] * hm2;
-            }
+            row[3] = hm0;
+            row[4] = hm1;
+            row[5] = hm2;
         }
     }
     return RP_OK;

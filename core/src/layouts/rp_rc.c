@@ -76,33 +76,39 @@ rp_status_t rp_rc_fuse(const rp_rig_t *rig, const uint8_t *cams, uint8_t n,
         return RP_E_ARG;
     }
 
-    /* Rotation: eq. (3) per camera, then the per-angle median. */
-    rp_real ang[3][RP_RC_MAX_CAMS];
+    /* Rotation: eq. (3) per camera, then the per-axis median in the chart of rp_rig.h at the
+     * reference camera's R_1j: w_i = Log(R_kj R_1j^T), R_j = Exp(median w) R_1j. The paper's
+     * per-angle median is not defined near beta = +-pi/2, where alpha and gamma of nearby
+     * rotations are far apart (only their sum or difference is determined). */
+    rp_real w[3][RP_RC_MAX_CAMS], Rref[9];
     for (uint8_t i = 0; i < n; ++i) {
         const rp_real *Rk = rig->cam[cams[i]].R;
-        rp_real r[9], Rkj[9], a[3];
+        rp_real r[9], Rkj[9], wi[3];
         rp_rot_from_angles(&p_own[i][3], r);
         rp_rot_mul(Rk, r, Rkj);
         rp_rot_mul_a_bt(Rkj, Rk, Rkj);
-        rp_status_t st = rp_rot_to_angles(Rkj, a);
-        if (st != RP_OK) {
-            return st;
+        if (i == 0) {
+            memcpy(Rref, Rkj, sizeof(Rref));
         }
+        rp_rot_mul_a_bt(Rkj, Rref, Rkj);
+        rp_rot_log(Rkj, wi);
         for (int c = 0; c < 3; ++c) {
-            ang[c][i] = i == 0 ? a[c] : ang[c][0] + rp_angle_wrap(a[c] - ang[c][0]);
+            w[c][i] = wi[c];
         }
     }
-    rp_real out[6];
+    rp_real out[6], wm[3], Rj[9];
     for (int c = 0; c < 3; ++c) {
-        rp_real m;
-        rp_status_t st = rp_rc_median(ang[c], n, &m);
+        rp_status_t st = rp_rc_median(w[c], n, &wm[c]);
         if (st != RP_OK) {
             return st;
         }
-        out[3 + c] = rp_angle_wrap(m);
     }
-    rp_real Rj[9];
-    rp_rot_from_angles(&out[3], Rj);
+    rp_rot_exp(wm, Rj);
+    rp_rot_mul(Rj, Rref, Rj);
+    rp_status_t st_ang = rp_rot_to_angles(Rj, &out[3]);
+    if (st_ang != RP_OK) {
+        return st_ang;
+    }
 
     /* Translation: A s = b (eqs. 5-7). */
     const rp_real *d = p_own[0]; /* d_j = l_1j */

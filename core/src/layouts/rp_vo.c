@@ -56,10 +56,11 @@ rp_status_t rp_vo_ekf_from_pose(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const
         return RP_E_ARG;
     }
     const rp_real s2 = prm->sigma_px * prm->sigma_px;
-    rp_real x[RP_EKF_N], P0diag[RP_EKF_N];
+    rp_real x[RP_EKF_N], P0diag[RP_EKF_N], d[6];
+    rp_pose_minus(p, p_prev, d); /* the chart of rp_rig.h: rates from Log(R R_prev^T) */
     for (int i = 0; i < 6; ++i) {
         x[i] = p[i];
-        x[6 + i] = (p[i] - p_prev[i]) / dt;
+        x[6 + i] = d[i] / dt;
         P0diag[i] = cov[i * 6 + i] * s2;
         P0diag[6 + i] = P0diag[i] / (dt * dt) + start_var(i);
     }

@@ -146,6 +146,8 @@ static void correct_pose(rp_vo_gc_t *vo)
     }
     rp_rot_apply(Rc, vo->ekf.x, t);
     rp_rot_apply(Rc, &vo->ekf.x[6], v);
+    /* the world-frame angular rate turns with the world: (Rc R)' = [Rc omega]x Rc R */
+    rp_rot_apply(Rc, &vo->ekf.x[9], &vo->ekf.x[9]);
     for (int a = 0; a < 3; ++a) {
         vo->ekf.x[a] = t[a] + tc[a];
         vo->ekf.x[3 + a] = ang[a];

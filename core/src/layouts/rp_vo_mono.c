@@ -221,26 +221,31 @@ static void fill_estimates(const rp_vo_mono_t *vo, int64_t utime, uint32_t flags
     if (own) {
         *own = e;
     }
-    /* Rig pose through the extrinsics; the translation covariance block is rotated by R_k
-     * (first order, the angle block kept as is). */
+    /* Rig pose through the extrinsics (eqs. 3-4). In rp_rig.h's chart the own rotation
+     * r = Exp(w) r^ gives R_j = R_k r R_k^T = Exp(R_k w) R^_j, and l maps to R_k l: both halves
+     * of the velocity and of the covariance turn by R_k, C_rig = T C T^T with
+     * T = diag(R_k, R_k) (first order: the term -R_j D_k's dependence on w is left out). */
     rp_real pr[6];
     if (rp_vo_mono_to_rig(vo->rig, vo->cfg.cam, e.p, pr) == RP_OK) {
         memcpy(e.p, pr, sizeof(pr));
         const rp_real *Rk = vo->rig->cam[vo->cfg.cam].R;
-        rp_real v[3];
-        rp_rot_apply(Rk, e.v, v);
-        memcpy(e.v, v, sizeof(v));
-        rp_real Ct[9], T[9];
-        for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) {
-                Ct[i * 3 + j] = e.cov[i * 6 + j];
-            }
-        }
-        rp_rot_mul(Rk, Ct, T);
-        rp_rot_mul_a_bt(T, Rk, Ct);
-        for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) {
-                e.cov[i * 6 + j] = Ct[i * 3 + j];
+        rp_rot_apply(Rk, e.v, e.v);
+        rp_rot_apply(Rk, e.v + 3, e.v + 3);
+        for (int bi = 0; bi < 2; ++bi) {
+            for (int bj = 0; bj < 2; ++bj) {
+                rp_real Ct[9], T[9];
+                for (int i = 0; i < 3; ++i) {
+                    for (int j = 0; j < 3; ++j) {
+                        Ct[i * 3 + j] = e.cov[(3 * bi + i) * 6 + 3 * bj + j];
+                    }
+                }
+                rp_rot_mul(Rk, Ct, T);
+                rp_rot_mul_a_bt(T, Rk, Ct);
+                for (int i = 0; i < 3; ++i) {
+                    for (int j = 0; j < 3; ++j) {
+                        e.cov[(3 * bi + i) * 6 + 3 * bj + j] = Ct[i * 3 + j];
+                    }
+                }
             }
         }
     }

@@ -439,9 +439,7 @@ static rp_status_t update_towards(rp_vo_stereo_t *vo, const rp_real p[6], uint32
 {
     rp_real d[6];
     vo->ekf = vo->ekf_pred;
-    for (int i = 0; i < 6; ++i) {
-        d[i] = p[i] - vo->ekf_pred.x[i];
-    }
+    rp_pose_minus(p, vo->ekf_pred.x, d); /* in the filter's chart (rp_ekf.h) */
     for (int i = 0; i < 6; ++i) {
         for (int j = 0; j < 6; ++j) {
             vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];

@@ -69,6 +69,27 @@ rp_status_t rp_rot_to_angles(const rp_real R[9], rp_real abg[3])
     return RP_OK;
 }
 
+rp_status_t rp_angles_plus(const rp_real abg[3], const rp_real w[3], rp_real out[3])
+{
+    if (!rp_all_finite(abg, 3) || !rp_all_finite(w, 3)) {
+        return RP_E_NAN;
+    }
+    rp_real R[9], E[9];
+    rp_rot_from_angles(abg, R);
+    rp_rot_exp(w, E);
+    rp_rot_mul(E, R, R);
+    return rp_rot_to_angles(R, out);
+}
+
+void rp_angles_minus(const rp_real a[3], const rp_real b[3], rp_real w[3])
+{
+    rp_real Ra[9], Rb[9];
+    rp_rot_from_angles(a, Ra);
+    rp_rot_from_angles(b, Rb);
+    rp_rot_mul_a_bt(Ra, Rb, Ra);
+    rp_rot_log(Ra, w);
+}
+
 /* dR/dalpha = R [e_x]x, dR/dbeta = Rz dRy Rx, dR/dgamma = [e_z]x R. */
 void rp_rot_angle_derivs(const rp_real abg[3], rp_real dR[3][9])
 {

@@ -238,7 +238,26 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     uint16_t nb = 0;
     (void)rp_smatch_pair(&pipe->sm, pipe->rig, sp, pa, pb, pipe->scratch_a, n_new,
                          pipe->scratch_b, RP_MAX_FEATS_PER_CAM, &nb, &info->match[k]);
-    for (uint16_t i = 0; i < nb && rp_track_adopt(B, &pipe->scratch_b[i]) != RP_E_FULL; ++i) {
+    uint16_t n_adopted = 0;
+    while (n_adopted < nb && rp_track_adopt(B, &pipe->scratch_b[n_adopted]) == RP_OK) {
+        ++n_adopted;
+    }
+    /* A new left feature without a match gives the stereo estimator nothing (it triangulates
+     * matches only) and would hold its cell in the left tracker for as long as it is tracked,
+     * keeping the tracker above its top-up threshold: drop it, so that the next top-up can look
+     * for a feature there again (the matcher walks both lists in input order). */
+    uint16_t n_lost = 0;
+    for (uint16_t i = 0, j = 0; i < n_new; ++i) {
+        if (j < n_adopted && pipe->scratch_b[j].id == pipe->scratch_a[i].id) {
+            ++j;
+        } else {
+            pipe->drop_ids[n_lost++] = pipe->scratch_a[i].id;
+        }
+    }
+    if (n_lost > 0) {
+        rp_tracker_t *A = &pipe->trk[ta];
+        (void)rp_track_drop_ids(A, pipe->drop_ids, n_lost, NULL);
+        (void)rp_track_features(A, pipe->fs.f[sp->a], RP_MAX_FEATS_PER_CAM, &pipe->fs.n[sp->a]);
     }
     (void)rp_track_features(B, pipe->fs.f[sp->b], RP_MAX_FEATS_PER_CAM, &pipe->fs.n[sp->b]);
 }

@@ -38,6 +38,7 @@
 #include "rigpose/rp_pipe.h"
 #include "rp_direct.hpp"
 #include "rp_mirror.hpp"
+#include "rp_rectify.hpp"
 #include "rp_realdata.hpp"
 #include "../../common/rp_cfg_diff.h"
 #include "../../common/rp_cv.hpp"
@@ -437,11 +438,12 @@ void usage(FILE *f)
         "  --replay-out DIR     write a replay folder (frames.csv, truth.csv, rig.yaml); image\n"
         "                       paths relative to DIR, or copies with --copy-images\n"
         "  --no-run             only load (and write the replay folder)\n"
-        "  --opencv-ref         also run plain OpenCV stereo odometry (rectified pairs only)\n"
+        "  --opencv-ref         also run plain OpenCV stereo odometry (a distorted or verged\n"
+        "                       pair, EuRoC's, is rectified for it: rp_rectify.hpp)\n"
         "                       as a yardstick of the ground truth\n"
         "  --direct-ref         also run dense direct stereo odometry (rp_direct.hpp:\n"
-        "                       SGBM depth + photometric alignment, no features; rectified\n"
-        "                       pairs only, about 1 s per frame) as a second yardstick\n"
+        "                       SGBM depth + photometric alignment, no features; about 1 s\n"
+        "                       per frame; rectified as for --opencv-ref) as a second yardstick\n"
         "  --mirror             run on the clip's mirror image instead (cameras swapped, images\n"
         "                       flipped left-right, calibration and truth mirrored: rp_mirror.hpp),\n"
         "                       written to a temporary folder removed at exit\n"
@@ -588,7 +590,7 @@ int main(int argc, char **argv)
                 fs::remove_all(path, ec);
             }
         }
-    } tmp;
+    } tmp, rect_tmp;
     if (mirror) {
         std::string out = mirror_out;
         if (out.empty()) {
@@ -728,34 +730,59 @@ int main(int argc, char **argv)
     std::printf("| largest / final error | %.4f m / %.4f m |\n", s.max_m, s.final_m);
     std::printf("| rotation error (RMSE) | %.3f deg |\n", s.rot_rmse_deg);
     std::printf("| frame-to-frame drift (RPE / path) | %.3f %% |\n", s.rpe_percent);
+    std::printf("| scale of the positions (est / true, least squares) | %.4f |\n", s.scale);
     std::printf("| frames lost / re-initialised | %zu / %zu |\n", lost, reinit);
     std::printf("| pipeline time per frame set | %.2f ms |\n", ms);
     rprd::Summary ref, dref, spliced;
-    const bool rectified = is_kitti;
+    /* the yardsticks need a rectified pair: a distorted or verged one (EuRoC) is rectified for
+     * them into a temporary folder (rp_rectify.hpp), scored against its truth in that frame */
+    rprd::Sequence rseq;
+    bool rectified = rprd::is_rectified(seq);
+    if ((opencv_ref || direct_ref) && !rectified) {
+        const char *td = std::getenv("TMPDIR");
+        std::string tmpl = std::string(td && *td ? td : "/tmp") + "/rigpose_rect_XXXXXX";
+        if (!mkdtemp(&tmpl[0])) {
+            std::fprintf(stderr, "rigpose-realdata: %s: cannot make a temporary folder\n",
+                         tmpl.c_str());
+            return 1;
+        }
+        rect_tmp.path = tmpl;
+        if (!rprd::rectify_sequence(seq, tmpl, &rseq, &err)) {
+            std::fprintf(stderr, "rigpose-realdata: yardsticks: %s\n", err.c_str());
+            return 1;
+        }
+        std::printf("yardsticks: the pair rectified (cv::stereoRectify; fx %.3f, baseline %.4f m) "
+                    "in %s (removed at exit)\n",
+                    (double)rseq.rig.cam[0].cam.fx, (double)rseq.rig.cam[1].D[0], tmpl.c_str());
+        rectified = true;
+    }
+    const rprd::Sequence &yseq = rseq.img[0].empty() ? seq : rseq;
     std::vector<rprd::Pose> traj, dtraj;
     if (opencv_ref && rectified) {
         bool ok = false;
         try {
-            ok = opencv_reference(seq, &traj);
+            ok = opencv_reference(yseq, &traj);
         } catch (const cv::Exception &e) {
             std::printf("yardstick: OpenCV raised: %s\n", e.what());
         }
         if (ok) {
-            ref = rprd::summarise(traj, seq.truth);
+            ref = rprd::summarise(traj, yseq.truth);
             std::printf("| yardstick: OpenCV frame-to-frame stereo PnP, ATE / path | %.3f %% "
-                        "(%.4f m) |\n| yardstick: its RPE / path | %.3f %% |\n",
-                        ref.ate_percent, ref.ate_m, ref.rpe_percent);
+                        "(%.4f m) |\n| yardstick: its RPE / path | %.3f %% |\n"
+                        "| yardstick: its scale | %.4f |\n",
+                        ref.ate_percent, ref.ate_m, ref.rpe_percent, ref.scale);
         } else {
             std::printf("yardstick: OpenCV stereo odometry failed\n");
             traj.clear();
         }
     }
     if (direct_ref) {
-        if (rprd::direct_reference(seq, dopts, &dtraj, nullptr, &err)) {
-            dref = rprd::summarise(dtraj, seq.truth);
+        if (rprd::direct_reference(yseq, dopts, &dtraj, nullptr, &err)) {
+            dref = rprd::summarise(dtraj, yseq.truth);
             std::printf("| yardstick 2: dense direct stereo odometry, ATE / path | %.3f %% "
-                        "(%.4f m) |\n| yardstick 2: its RPE / path | %.3f %% |\n",
-                        dref.ate_percent, dref.ate_m, dref.rpe_percent);
+                        "(%.4f m) |\n| yardstick 2: its RPE / path | %.3f %% |\n"
+                        "| yardstick 2: its scale | %.4f |\n",
+                        dref.ate_percent, dref.ate_m, dref.rpe_percent, dref.scale);
         } else {
             std::printf("%s\n", err.c_str());
             dtraj.clear();
@@ -763,10 +790,10 @@ int main(int argc, char **argv)
     }
     if (splice > 0 && splice < dtraj.size()) {
         std::vector<rprd::Pose> mix(dtraj.begin(), dtraj.begin() + (long)splice + 1);
-        for (size_t j = splice + 1; j < seq.truth.size(); ++j) {
-            mix.push_back(rprd::pose_mul(mix.back(), step_of(seq.truth, j)));
+        for (size_t j = splice + 1; j < yseq.truth.size(); ++j) {
+            mix.push_back(rprd::pose_mul(mix.back(), step_of(yseq.truth, j)));
         }
-        spliced = rprd::summarise(mix, seq.truth);
+        spliced = rprd::summarise(mix, yseq.truth);
         std::printf("| yardstick 2 to frame %zu, then the truth's own steps: ATE / path | %.3f %% "
                     "(%.4f m) |\n",
                     splice, spliced.ate_percent, spliced.ate_m);
@@ -784,20 +811,20 @@ int main(int argc, char **argv)
         std::fprintf(f,
                      "{\"%s_ate_m\": %.6f, \"%s_ate_percent\": %.6f, \"%s_path_m\": %.4f, "
                      "\"%s_max_err_m\": %.6f, \"%s_rot_rmse_deg\": %.5f, \"%s_rpe_percent\": %.5f, \"%s_frames\": %zu, "
-                     "\"%s_frames_lost\": %zu, \"%s_ms_per_frame\": %.3f",
+                     "\"%s_frames_lost\": %zu, \"%s_ms_per_frame\": %.3f, \"%s_scale\": %.5f",
                      n, s.ate_m, n, s.ate_percent, n, s.path_m, n, s.max_m, n, s.rot_rmse_deg, n, s.rpe_percent, n,
-                     s.frames, n, lost, n, ms);
+                     s.frames, n, lost, n, ms, n, s.scale);
         if (ref.frames) {
             std::fprintf(f,
                          ", \"%s_opencv_ref_ate_percent\": %.6f, \"%s_opencv_ref_rpe_percent\": "
-                         "%.5f",
-                         n, ref.ate_percent, n, ref.rpe_percent);
+                         "%.5f, \"%s_opencv_ref_scale\": %.5f, \"%s_opencv_ref_ate_m\": %.6f",
+                         n, ref.ate_percent, n, ref.rpe_percent, n, ref.scale, n, ref.ate_m);
         }
         if (dref.frames) {
             std::fprintf(f,
                          ", \"%s_direct_ref_ate_percent\": %.6f, \"%s_direct_ref_rpe_percent\": "
-                         "%.5f",
-                         n, dref.ate_percent, n, dref.rpe_percent);
+                         "%.5f, \"%s_direct_ref_scale\": %.5f, \"%s_direct_ref_ate_m\": %.6f",
+                         n, dref.ate_percent, n, dref.rpe_percent, n, dref.scale, n, dref.ate_m);
         }
         if (spliced.frames) {
             std::fprintf(f, ", \"%s_direct_to%zu_then_truth_ate_percent\": %.6f", n, splice,

@@ -2,6 +2,7 @@
  * rp_direct.cpp - dense direct stereo odometry, the feature-free yardstick (rp_direct.hpp).
  */
 #include "rp_direct.hpp"
+#include "rp_rectify.hpp"
 
 #include <cmath>
 
@@ -175,12 +176,9 @@ bool direct_reference(const Sequence &seq, const DirectOpts &o, std::vector<Pose
 {
     const rp_rig_cam_t &c0 = seq.rig.cam[0], &c1 = seq.rig.cam[1];
     const rp_camera_t &c = c0.cam;
-    const bool rectified = seq.rig.n_cams == 2 && c.k1 == 0 && c.k2 == 0 && c.p1 == 0 &&
-                           c.p2 == 0 && c.k3 == 0 && c1.cam.fx == c.fx && c1.cam.cx == c.cx &&
-                           c1.cam.cy == c.cy && c1.D[0] > 0 && c1.D[1] == 0 && c1.D[2] == 0 &&
-                           c1.R[0] == 1 && c1.R[4] == 1 && c1.R[8] == 1;
+    const bool rectified = is_rectified(seq);
     if (!rectified) {
-        *err = "direct yardstick: needs a rectified pair (KITTI)";
+        *err = "direct yardstick: needs a rectified pair (rectify_sequence)";
         return false;
     }
     const Intrinsics k = {(double)c.fx, (double)c.fy, (double)c.cx, (double)c.cy};

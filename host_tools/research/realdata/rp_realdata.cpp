@@ -676,10 +676,14 @@ Summary summarise(const std::vector<Pose> &est, const std::vector<Pose> &truth)
 {
     Summary s;
     s.frames = std::min(est.size(), truth.size());
-    double se = 0.0, sr = 0.0, rpe = 0.0;
+    double se = 0.0, sr = 0.0, rpe = 0.0, et = 0.0, tt = 0.0;
     for (size_t j = 0; j < s.frames; ++j) {
         double p[6];
         pose_to_vec(est[j], p);
+        for (int i = 0; i < 3; ++i) {
+            et += est[j].t[i] * truth[j].t[i];
+            tt += truth[j].t[i] * truth[j].t[i];
+        }
         const FrameErr e = frame_error(p, truth[j]);
         se += e.trans_m * e.trans_m;
         sr += e.rot_rad * e.rot_rad;
@@ -700,6 +704,9 @@ Summary summarise(const std::vector<Pose> &est, const std::vector<Pose> &truth)
     if (s.frames) {
         s.ate_m = std::sqrt(se / (double)s.frames);
         s.rot_rmse_deg = std::sqrt(sr / (double)s.frames) * 180.0 / M_PI;
+    }
+    if (tt > 0.0) {
+        s.scale = et / tt;
     }
     if (s.path_m > 0.0) {
         s.ate_percent = 100.0 * s.ate_m / s.path_m;

@@ -1,0 +1,67 @@
+"""Print the realdata bench section as a table against the targets of the data's README.
+
+usage: realdata_table.py REALDATA.json
+
+REALDATA.json is $(BUILD)/bench/realdata.json (rigpose-realdata --json-out of every clip,
+merged). The targets are the ones ../shared/data/README.md states for each clip ("What rigpose
+must do on them"); they live here and nowhere else in the repository. Prints, per clip:
+rigpose's ATE, the yardsticks on the same frames (OpenCV stereo PnP, dense direct; on a
+rectified copy of a distorted pair, rp_rectify.hpp), the target, whether the target is met, whether rigpose is at or
+below the best yardstick, the trajectory's scale, and the mirrored clip's ATE and its
+difference from the original's (the README's bound: within 10 %). Exit status 0 whatever the
+figures: this is a report, the tests are in make test.
+"""
+import json
+import sys
+
+# (name prefix in the JSON, what, target, unit, mirror prefix); unit "%": percent of the path
+CLIPS = [
+    ("kitti_raw0005", "KITTI raw 0005, frames 0-90", 2.0, "%", "kitti_raw0005_mirror"),
+    ("kitti00", "KITTI 00, frames 0-99", 2.5, "%", "kitti00_mirror"),
+    ("kitti00_from14", "KITTI 00, frames 14-99", 1.0, "%", "kitti00_from14_mirror"),
+    ("euroc_mh01", "EuRoC MH01, frames 0-149", 0.03, "m", "euroc_mh01_mirror"),
+]
+MIRROR_TOL = 0.10
+
+
+def ate(d, name, unit):
+    return d.get(f"{name}_ate_percent" if unit == "%" else f"{name}_ate_m")
+
+
+def fmt(v, unit):
+    if v is None:
+        return "-"
+    return f"{v:.3f} %" if unit == "%" else f"{v:.4f} m"
+
+
+def main(argv):
+    if len(argv) != 1:
+        print(__doc__, file=sys.stderr)
+        return 2
+    with open(argv[0]) as f:
+        d = json.load(f)
+    print("\nrealdata: one default configuration on every clip (targets: ../shared/data/README.md)")
+    print("| clip | rigpose ATE | OpenCV PnP | dense direct | target | met | <= best yardstick "
+          "| scale | mirrored | mirror diff |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, what, target, unit, mname in CLIPS:
+        a = ate(d, name, unit)
+        if a is None:
+            print(f"| {what} | (not run) | | | | | | | | |")
+            continue
+        o = ate(d, f"{name}_opencv_ref", unit)
+        r = ate(d, f"{name}_direct_ref", unit)
+        refs = [v for v in (o, r) if v is not None]
+        best = "-" if not refs else ("yes" if a <= min(refs) else f"no ({fmt(min(refs), unit)})")
+        m = ate(d, mname, unit)
+        diff = "-" if m is None else f"{100.0 * (m - a) / a:+.1f} %" + (
+            "" if abs(m - a) <= MIRROR_TOL * a else " (over 10 %)")
+        sc = d.get(f"{name}_scale")
+        print(f"| {what} | {fmt(a, unit)} | {fmt(o, unit)} | {fmt(r, unit)} | {fmt(target, unit)} "
+              f"| {'yes' if a <= target else 'no'} | {best} | "
+              f"{'-' if sc is None else f'{sc:.4f}'} | {fmt(m, unit)} | {diff} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
