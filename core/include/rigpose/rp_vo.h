@@ -22,6 +22,7 @@
 #include "rp_ekf.h"
 #include "rp_frame.h"
 #include "rp_opts.h"
+#include "rp_ransac.h"
 #include "rp_rig.h"
 #include "rp_status.h"
 
@@ -35,6 +36,28 @@ extern "C" {
                                         * definition; kept positive definite), m^2 and rad^2 */
 #define RP_VO_MIN_START 6              /* landmarks a first frame set needs to count as a start
                                         * (the 6 pose parameters) */
+
+/* Rig RANSAC's parameters for a layout whose filter has settings prm: the filter's gate
+ * (gate_chi2, when gating) on a residual of variance 2 sigma_px^2 (a landmark placed from
+ * earlier pixels carries their noise as well as the current pixel's), at least prm's
+ * min_features inliers. */
+rp_ransac_params_t rp_vo_ransac_params(const rp_ekf_params_t *prm);
+
+/* *out = pred with its pose covariance widened by d d^T, d = p [-] pred's pose (rp_pose_minus:
+ * the filter's chart): an update from it can reach p, a pose found from the images, while the
+ * velocity keeps its correlation with the pose. RP_E_ARG on NULL. */
+rp_status_t rp_vo_ekf_towards(const rp_ekf_t *pred, const rp_real p[6], rp_ekf_t *out);
+
+/* The re-find of a layout whose update left most of its n observations out: rig RANSAC
+ * (rp_vo_ransac_params) over obs through rig, then the plain update redone on its inliers
+ * (outliers get w = 0) from pred widened towards RANSAC's pose (rp_vo_ekf_towards). RP_OK, with
+ * *ekf, used[0..n) and *info replaced (RANSAC's outliers counted as gated and outside), when
+ * RANSAC found more inliers than first_used and the redone update uses at least half of them;
+ * otherwise RP_E_TOO_FEW with *ekf unchanged (obs's weights are scratch then). inl: n bytes of
+ * scratch. */
+rp_status_t rp_vo_refind(rp_ransac_t *rs, const rp_rig_t *rig, const rp_ekf_t *pred,
+                         rp_obs_t *obs, uint32_t n, uint32_t first_used, uint8_t *inl,
+                         rp_ekf_t *ekf, uint8_t *used, rp_ekf_info_t *info);
 
 /* x = 0, P = I under prm (the filter before the first frame set). rp_ekf_init's errors. */
 rp_status_t rp_vo_ekf_idle(rp_ekf_t *ekf, const rp_ekf_params_t *prm);

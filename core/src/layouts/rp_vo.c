@@ -144,3 +144,63 @@ rp_status_t rp_vo_end_step(const rp_frameset_t *fs, uint16_t n_gated, rp_status_
     ++*frame;
     return rp_vo_step_status(filter_st);
 }
+
+rp_ransac_params_t rp_vo_ransac_params(const rp_ekf_params_t *prm)
+{
+    rp_ransac_params_t rp = rp_ransac_default_params();
+    rp.sigma_px = prm->sigma_px * RP_C(1.4142135623730951); /* sqrt(2) sigma_px */
+    if (prm->gate_chi2 > RP_C(0.0)) {
+        rp.chi2 = prm->gate_chi2;
+    }
+    if (prm->min_features > rp.min_inliers) {
+        rp.min_inliers = prm->min_features;
+    }
+    return rp;
+}
+
+rp_status_t rp_vo_ekf_towards(const rp_ekf_t *pred, const rp_real p[6], rp_ekf_t *out)
+{
+    if (!pred || !p || !out) {
+        return RP_E_ARG;
+    }
+    rp_real d[6];
+    *out = *pred;
+    rp_pose_minus(p, pred->x, d);
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            out->P[i * RP_EKF_N + j] += d[i] * d[j];
+        }
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_vo_refind(rp_ransac_t *rs, const rp_rig_t *rig, const rp_ekf_t *pred,
+                         rp_obs_t *obs, uint32_t n, uint32_t first_used, uint8_t *inl,
+                         rp_ekf_t *ekf, uint8_t *used, rp_ekf_info_t *info)
+{
+    if (!rs || !rig || !pred || (n > 0 && (!obs || !inl || !used)) || !ekf || !info) {
+        return RP_E_ARG;
+    }
+    const rp_ransac_params_t rp = rp_vo_ransac_params(&pred->prm);
+    rp_ransac_result_t res;
+    rp_ekf_t e;
+    if (rp_ransac_solve(rs, rig, obs, n, &rp, inl, &res) != RP_OK ||
+        res.n_inliers <= first_used || rp_vo_ekf_towards(pred, res.p, &e) != RP_OK) {
+        return RP_E_TOO_FEW;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!inl[i]) {
+            obs[i].w = RP_C(0.0);
+        }
+    }
+    rp_ekf_info_t retry;
+    if (rp_ekf_update(&e, rig, obs, n, used, &retry) != RP_OK ||
+        2u * retry.n_used < res.n_inliers) {
+        return RP_E_TOO_FEW;
+    }
+    *ekf = e;
+    *info = retry;
+    info->n_gated = (uint16_t)(info->n_gated + n - res.n_inliers); /* RANSAC's outliers */
+    info->n_outside = info->n_gated;
+    return RP_OK;
+}

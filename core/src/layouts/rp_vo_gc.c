@@ -457,45 +457,10 @@ static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
  * (vo->pobs's weights are scratch: RANSAC's outliers may be left at 0). */
 static rp_status_t refind(rp_vo_gc_t *vo, uint32_t m, uint32_t first_used, rp_ekf_info_t *info)
 {
-    rp_ransac_params_t rp = rp_ransac_default_params();
-    rp.sigma_px = vo->cfg.ekf.sigma_px * RP_C(1.4142135623730951);
-    if (vo->cfg.ekf.gate_chi2 > RP_C(0.0)) {
-        rp.chi2 = vo->cfg.ekf.gate_chi2;
-    }
-    rp.min_inliers = vo->cfg.ekf.min_features > rp.min_inliers ? vo->cfg.ekf.min_features
-                                                               : rp.min_inliers;
-    rp_ransac_result_t res;
-    if (rp_ransac_solve(&vo->rs, &vo->rig_m, vo->pobs, m, &rp, vo->inl, &res) != RP_OK ||
-        res.n_inliers <= first_used) {
-        return RP_E_TOO_FEW;
-    }
-    const rp_ekf_t first = vo->ekf;
-    vo->ekf = vo->ekf_pred;
-    rp_real d[6];
-    for (int i = 0; i < 6; ++i) {
-        d[i] = res.p[i] - vo->ekf_pred.x[i];
-    }
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
-        }
-    }
-    for (uint32_t i = 0; i < m; ++i) {
-        if (!vo->inl[i]) {
-            vo->pobs[i].w = RP_C(0.0);
-        }
-    }
-    rp_ekf_info_t retry;
-    if (rp_ekf_update(&vo->ekf, &vo->rig_m, vo->pobs, m, vo->pused, &retry) == RP_OK &&
-        2u * retry.n_used >= res.n_inliers) {
-        *info = retry;
-        info->n_gated = (uint16_t)(info->n_gated + m - res.n_inliers); /* RANSAC's outliers */
-        info->n_outside = info->n_gated;
-        vo->n_refound++;
-        return RP_OK;
-    }
-    vo->ekf = first;
-    return RP_E_TOO_FEW;
+    const rp_status_t st = rp_vo_refind(&vo->rs, &vo->rig_m, &vo->ekf_pred, vo->pobs, m,
+                                        first_used, vo->inl, &vo->ekf, vo->pused, info);
+    vo->n_refound += st == RP_OK;
+    return st;
 }
 
 /* Step 2's pose update of the m offered observations vo->pobs: 1-point RANSAC or the plain

@@ -313,44 +313,10 @@ static rp_status_t start_with_lowe(rp_vo_mono_t *vo, uint32_t n, rp_real dt)
  * RP_E_TOO_FEW, vo->ekf as given (RANSAC's outliers may be left at w = 0 in vo->obs). */
 static rp_status_t refind(rp_vo_mono_t *vo, uint32_t n, uint32_t first_used, rp_ekf_info_t *info)
 {
-    rp_ransac_params_t rp = rp_ransac_default_params();
-    rp.sigma_px = vo->cfg.ekf.sigma_px * RP_C(1.4142135623730951);
-    if (vo->cfg.ekf.gate_chi2 > RP_C(0.0)) {
-        rp.chi2 = vo->cfg.ekf.gate_chi2;
-    }
-    rp.min_inliers = vo->cfg.ekf.min_features > rp.min_inliers ? vo->cfg.ekf.min_features
-                                                               : rp.min_inliers;
-    rp_ransac_result_t res;
-    if (rp_ransac_solve(&vo->rs, &vo->own, vo->obs, n, &rp, vo->inl, &res) != RP_OK ||
-        res.n_inliers <= first_used) {
-        return RP_E_TOO_FEW;
-    }
-    const rp_ekf_t first = vo->ekf;
-    vo->ekf = vo->ekf_pred;
-    rp_real d[6];
-    for (int i = 0; i < 6; ++i) {
-        d[i] = res.p[i] - vo->ekf_pred.x[i];
-    }
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
-        }
-    }
-    for (uint32_t i = 0; i < n; ++i) {
-        if (!vo->inl[i]) {
-            vo->obs[i].w = RP_C(0.0);
-        }
-    }
-    rp_ekf_info_t retry;
-    if (rp_ekf_update(&vo->ekf, &vo->own, vo->obs, n, vo->used, &retry) == RP_OK &&
-        2u * retry.n_used >= res.n_inliers) {
-        *info = retry;
-        info->n_gated = (uint16_t)(info->n_gated + n - res.n_inliers); /* RANSAC's outliers */
-        vo->n_refound++;
-        return RP_OK;
-    }
-    vo->ekf = first;
-    return RP_E_TOO_FEW;
+    const rp_status_t st = rp_vo_refind(&vo->rs, &vo->own, &vo->ekf_pred, vo->obs, n,
+                                        first_used, vo->inl, &vo->ekf, vo->used, info);
+    vo->n_refound += st == RP_OK;
+    return st;
 }
 
 /* Step (3)'s update: 1-point RANSAC or the plain gated update, then (cfg.ransac) the re-find

@@ -266,13 +266,7 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
 static rp_status_t robust_pose(rp_vo_stereo_t *vo, uint32_t n, rp_real p[6], rp_real cov[36],
                                uint32_t *n_inl)
 {
-    rp_ransac_params_t rp = rp_ransac_default_params();
-    rp.sigma_px = vo->cfg.ekf.sigma_px * RP_C(1.4142135623730951);
-    if (vo->cfg.ekf.gate_chi2 > RP_C(0.0)) {
-        rp.chi2 = vo->cfg.ekf.gate_chi2;
-    }
-    rp.min_inliers = vo->cfg.ekf.min_features > rp.min_inliers ? vo->cfg.ekf.min_features
-                                                               : rp.min_inliers;
+    const rp_ransac_params_t rp = rp_vo_ransac_params(&vo->cfg.ekf);
     rp_ransac_result_t res;
     rp_status_t st = rp_ransac_solve(&vo->rs, vo->rig, vo->obs, n, &rp, vo->inl, &res);
     if (st != RP_OK) {
@@ -437,14 +431,7 @@ static int pair_rejected(const rp_vo_stereo_t *vo, uint32_t n)
 static rp_status_t update_towards(rp_vo_stereo_t *vo, const rp_real p[6], uint32_t n,
                                   rp_ekf_info_t *retry)
 {
-    rp_real d[6];
-    vo->ekf = vo->ekf_pred;
-    rp_pose_minus(p, vo->ekf_pred.x, d); /* in the filter's chart (rp_ekf.h) */
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            vo->ekf.P[i * RP_EKF_N + j] += d[i] * d[j];
-        }
-    }
+    (void)rp_vo_ekf_towards(&vo->ekf_pred, p, &vo->ekf);
     if (vo->cfg.one_point) {
         /* the retry too keeps to the largest consensus: a self-consistent group (a moving
          * object) that the first update left out must not come back through it */

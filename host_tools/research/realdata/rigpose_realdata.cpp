@@ -581,8 +581,21 @@ int main(int argc, char **argv)
         std::printf("read %s\n", n.c_str());
     }
     /* --mirror: write the clip's mirror image (rp_mirror.hpp) and run on that instead */
+    /* a temporary folder under $TMPDIR (or /tmp), removed at exit */
     struct TmpDir {
         std::string path;
+        bool make(const char *prefix)
+        {
+            const char *td = std::getenv("TMPDIR");
+            std::string tmpl = std::string(td && *td ? td : "/tmp") + "/" + prefix + "_XXXXXX";
+            if (!mkdtemp(&tmpl[0])) {
+                std::fprintf(stderr, "rigpose-realdata: %s: cannot make a temporary folder\n",
+                             tmpl.c_str());
+                return false;
+            }
+            path = tmpl;
+            return true;
+        }
         ~TmpDir()
         {
             std::error_code ec;
@@ -594,14 +607,10 @@ int main(int argc, char **argv)
     if (mirror) {
         std::string out = mirror_out;
         if (out.empty()) {
-            const char *td = std::getenv("TMPDIR");
-            std::string tmpl = std::string(td && *td ? td : "/tmp") + "/rigpose_mirror_XXXXXX";
-            if (!mkdtemp(&tmpl[0])) {
-                std::fprintf(stderr, "rigpose-realdata: %s: cannot make a temporary folder\n",
-                             tmpl.c_str());
+            if (!tmp.make("rigpose_mirror")) {
                 return 1;
             }
-            out = tmp.path = tmpl;
+            out = tmp.path;
         }
         rprd::Sequence m;
         if (!rprd::write_sequence(rprd::mirror_sequence(seq), out, true, &err) ||
@@ -739,14 +748,10 @@ int main(int argc, char **argv)
     rprd::Sequence rseq;
     bool rectified = rprd::is_rectified(seq);
     if ((opencv_ref || direct_ref) && !rectified) {
-        const char *td = std::getenv("TMPDIR");
-        std::string tmpl = std::string(td && *td ? td : "/tmp") + "/rigpose_rect_XXXXXX";
-        if (!mkdtemp(&tmpl[0])) {
-            std::fprintf(stderr, "rigpose-realdata: %s: cannot make a temporary folder\n",
-                         tmpl.c_str());
+        if (!rect_tmp.make("rigpose_rect")) {
             return 1;
         }
-        rect_tmp.path = tmpl;
+        const std::string &tmpl = rect_tmp.path;
         if (!rprd::rectify_sequence(seq, tmpl, &rseq, &err)) {
             std::fprintf(stderr, "rigpose-realdata: yardsticks: %s\n", err.c_str());
             return 1;
