@@ -81,6 +81,12 @@ rp_status_t rp_ekf_init(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real
  * change for a non-finite pose or rate). */
 rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt);
 
+/* r^T S^-1 r with S = J C J^T + s2 I: the 2-dof Mahalanobis distance of a residual r whose
+ * pixel's Jacobian is J (2x6, the pose chart) under pose covariance C (6x6) and pixel variance
+ * s2. 1e30 (farther than any gate) if S is not positive definite. */
+rp_real rp_ekf_mahalanobis2(const rp_real J[12], const rp_real C[36], rp_real s2,
+                            const rp_real r[2]);
+
 /* Measurement update with n observations. `used` (n bytes, may be NULL) receives 1 for each
  * observation used, 0 for one gated or unprojectable. info may be NULL.
  * Returns RP_OK; RP_E_TOO_FEW (fewer than prm.min_features usable; the state is left as

@@ -168,7 +168,8 @@ rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt)
 }
 
 /* 2x2 Mahalanobis distance r^T S^-1 r with S = J C J^T + s2 I (J 2x6, C 6x6). */
-static rp_real mahalanobis2(const rp_real J[12], const rp_real *C, rp_real s2, const rp_real r[2])
+rp_real rp_ekf_mahalanobis2(const rp_real J[12], const rp_real C[36], rp_real s2,
+                            const rp_real r[2])
 {
     rp_real JC[12];
     for (int a = 0; a < 2; ++a) {
@@ -317,7 +318,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
                 rp_real r[2] = {o->uv[0] - uv[0], o->uv[1] - uv[1]};
                 if (gate) {
                     /* innovation of this feature against the current estimate */
-                    rp_real d2 = mahalanobis2(J, Cpost, s2 / o->w, r);
+                    rp_real d2 = rp_ekf_mahalanobis2(J, Cpost, s2 / o->w, r);
                     if (d2 > prm->gate_chi2) {
                         n_gated++;
                         if (used) {

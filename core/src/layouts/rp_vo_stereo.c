@@ -299,33 +299,14 @@ static rp_status_t robust_pose(rp_vo_stereo_t *vo, uint32_t n, rp_real p[6], rp_
         }
         uint32_t added = 0;
         for (uint32_t i = 0; i < n; ++i) {
-            rp_real uv[2], J[12], JC[12], S[4];
+            rp_real uv[2], J[12];
             if (vo->inl[i] || !rp_all_finite(vo->obs[i].uv, 2) ||
                 rp_rig_project(vo->rig, vo->obs[i].cam, &pl, vo->obs[i].M, uv, J, NULL) != RP_OK) {
                 continue;
             }
-            for (int r = 0; r < 2; ++r) {
-                for (int j = 0; j < 6; ++j) {
-                    rp_real acc = RP_C(0.0);
-                    for (int k = 0; k < 6; ++k) {
-                        acc += J[r * 6 + k] * cov[k * 6 + j];
-                    }
-                    JC[r * 6 + j] = acc;
-                }
-            }
-            for (int r = 0; r < 2; ++r) {
-                for (int c = 0; c < 2; ++c) {
-                    rp_real acc = RP_C(0.0);
-                    for (int k = 0; k < 6; ++k) {
-                        acc += JC[r * 6 + k] * J[c * 6 + k];
-                    }
-                    S[r * 2 + c] = s2 * acc + (r == c ? RP_C(2.0) * s2 : RP_C(0.0));
-                }
-            }
-            const rp_real du = vo->obs[i].uv[0] - uv[0], dv = vo->obs[i].uv[1] - uv[1];
-            const rp_real det = S[0] * S[3] - S[1] * S[2];
-            if (det > RP_C(0.0) &&
-                (S[3] * du * du - (S[1] + S[2]) * du * dv + S[0] * dv * dv) / det <= rp.chi2) {
+            /* S = s2 (J cov J^T + 2 I): r^T S^-1 r = r^T (J cov J^T + 2 I)^-1 r / s2 */
+            const rp_real r[2] = {vo->obs[i].uv[0] - uv[0], vo->obs[i].uv[1] - uv[1]};
+            if (rp_ekf_mahalanobis2(J, cov, RP_C(2.0), r) / s2 <= rp.chi2) {
                 vo->inl[i] = 1;
                 vo->obs[i].w = RP_C(1.0);
                 added++;
