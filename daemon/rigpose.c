@@ -150,7 +150,7 @@ static const char *cam_state_str(int state)
 static void flag_names(uint32_t f, char *out, size_t cap)
 {
     static const char *const names[] = {"INIT", "TRACK", "REINIT", "DEGRADED",
-                                        "LOST", "GATED", "COVRESET", "SCALEWEAK"};
+                                        "LOST", "GATED", "COVRESET", "SCALEWEAK", "HELD"};
     out[0] = '\0';
     size_t used = 0;
     for (unsigned b = 0; b < sizeof names / sizeof names[0]; ++b) {

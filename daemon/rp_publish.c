@@ -22,7 +22,8 @@ RP_STATIC_ASSERT(RIGPOSE_POSE_T_METHOD_STEREO4 == RP_PIPE_STEREO4 &&
                      RIGPOSE_POSE_T_METHOD_RC == RP_PIPE_RC && RP_PIPE_LAYOUT_COUNT_ == 8,
                  "pose_t.METHOD_* are rp_pipe_layout_t, all eight");
 RP_STATIC_ASSERT(RIGPOSE_POSE_T_FLAG_LOST == RP_EST_LOST &&
-                     RIGPOSE_POSE_T_FLAG_SCALE_WEAK == RP_EST_SCALE_WEAK,
+                     RIGPOSE_POSE_T_FLAG_SCALE_WEAK == RP_EST_SCALE_WEAK &&
+                     RIGPOSE_POSE_T_FLAG_HELD == RP_EST_HELD,
                  "pose_t.FLAG_* are RP_EST_*");
 /* lcm-gen's sizes are int. */
 RP_STATIC_ASSERT(RP_PUB_IMAGE_BYTES < 0x7fffffff, "image_t fits an int length");

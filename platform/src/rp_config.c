@@ -641,6 +641,7 @@ static const est_key_t est_keys[] = {
     {"gate_chi2", K_REAL, -1e6, 1e6, 0, ALL3(ekf.gate_chi2)},
     {"iterations", K_U8, 1, 20, 0, ALL3(ekf.iterations)},
     {"min_features", K_U16, 3, RP_MAX_FEATS_PER_CAM, 0, ALL3(ekf.min_features)},
+    {"max_predict_s", K_REAL, 0.0, 1e6, 1, ALL3(ekf.max_predict_s)},
     {"min_tracked", K_U16, 6, RP_MAX_FEATS_PER_CAM, 0, ALL3(min_tracked)},
     {"default_dt_s", K_REAL, 0.0, 10.0, 1, ALL3(default_dt_s)},
     {"max_epipolar_px", K_REAL, 0.0, 100.0, 1, 1, {F(stereo.max_epipolar_px)}},
@@ -697,7 +698,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         "max_epipolar_px", "min_depth_m", "max_depth_m", "max_reproj_px",   "refine_structure",
         "ransac",      "one_point",    "quarantine",
         "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s",
-        "metric_scale_sigma", NULL};
+        "metric_scale_sigma", "max_predict_s", NULL};
     const char *P = "estimator";
     yaml_node_t *m;
     char method[16];

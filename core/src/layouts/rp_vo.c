@@ -120,6 +120,12 @@ rp_status_t rp_vo_fill_estimate(const rp_ekf_t *ekf, rp_real t_scale, int64_t ut
             est->cov[i * 6 + j] = si * sj * ekf->P[i * RP_EKF_N + j];
         }
     }
+    if (flags & RP_EST_LOST) {
+        flags &= ~(uint32_t)RP_EST_TRACKING; /* no update this frame: never both */
+    }
+    if (ekf->held) {
+        flags |= RP_EST_HELD | RP_EST_LOST;
+    }
     est->flags = flags;
     est->n_landmarks = n_landmarks;
     return RP_OK;
