@@ -4,7 +4,7 @@
  *
  * Second cameras of stereo pairs run an rp_tracker_t that is fed, not detecting: after every
  * rp_track_process the pipeline keeps only the features it handed over (ids of the pair's first
- * camera, id % RP_MAX_CAMS == that camera, rp_track.h's id scheme) and appends each new match
+ * camera, rp_track_id_cam(id) == that camera, rp_track.h's id scheme) and appends each new match
  * to the tracker's list at its matched position (rp_track_keep_owned, rp_track_adopt,
  * rp_track_features).
  */
@@ -231,7 +231,7 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     uint16_t n_new = 0;
     for (uint16_t i = 0; i < pipe->fs.n[sp->a]; ++i) {
         const rp_feat_t *f = &pipe->fs.f[sp->a][i];
-        if (f->id / RP_MAX_CAMS >= pipe->born_k[ta]) {
+        if (rp_track_serial_since(rp_track_id_serial(f->id), pipe->born_k[ta])) {
             pipe->scratch_a[n_new++] = *f;
         }
     }
