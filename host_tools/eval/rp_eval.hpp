@@ -4,7 +4,7 @@
  * trajectory error with optional SE(3) / Sim(3) Umeyama alignment, relative pose error, and the paper's
  * Fig. 3/4-style six-panel plot. Host only (OpenCV for the drawing).
  *
- * Conventions (DESIGN.md): a pose is cam1 in the world, p_world = R p_cam1 + t; angles
+ * Conventions (docs/design.md): a pose is cam1 in the world, p_world = R p_cam1 + t; angles
  * (alpha, beta, gamma) with R = Rz(gamma) Ry(beta) Rx(alpha); quaternions (w, x, y, z) here,
  * written in TUM's order (x, y, z, w); metres, radians; utime in microseconds.
  */
