@@ -31,17 +31,26 @@ inner() {
   [ -n "$win" ] || { echo "lcm-spy-screenshot: no lcm-spy window"; cat "$TMP/spy.out"; exit 1; }
   xdotool windowmove "$win" 0 0 windowsize "$win" 700 260
   sleep 3   # the channel list fills while the daemon publishes
-  # Rows are sorted by channel: RIGPOSE_POSE is the first. Double click opens its viewer.
-  xdotool mousemove --window "$win" 60 28 click --repeat 2 --delay 80 1
-  sleep 2
-  local viewer
-  viewer=$(xdotool search --name "RIGPOSE_POSE" 2>/dev/null | head -1 || true)
+  # Rows are sorted by channel: RIGPOSE_POSE is the first. A double click opens its viewer; on a
+  # loaded machine the row may not be there yet: click again, up to 10 times.
+  local viewer="" tries
+  for tries in $(seq 10); do
+    xdotool mousemove --window "$win" 60 28 click --repeat 2 --delay 80 1
+    for _ in $(seq 20); do
+      viewer=$(xdotool search --name "RIGPOSE_POSE" 2>/dev/null | head -1 || true)
+      [ -n "$viewer" ] && break 2
+      sleep 0.1
+    done
+  done
   [ -n "$viewer" ] && xdotool windowmove "$viewer" 0 280 windowsize "$viewer" 700 780
   sleep 2
   import -window root "$OUT"
   kill "$dmn" "$spy" 2>/dev/null || true
   wait 2>/dev/null || true
-  grep -q "Found 3 LCM types" "$TMP/spy.out" || { echo "lcm-spy found no rigpose types"; exit 1; }
+  local ntypes
+  ntypes=$(ls lcm_types/*.lcm | wc -l)
+  grep -q "Found $ntypes LCM types" "$TMP/spy.out" ||
+    { echo "lcm-spy did not find the $ntypes rigpose types"; cat "$TMP/spy.out"; exit 1; }
   [ -n "$viewer" ] || { echo "lcm-spy-screenshot: no RIGPOSE_POSE viewer window"; exit 1; }
 }
 if [ "${RP_SPY_INNER:-}" = 1 ]; then inner; exit 0; fi

@@ -5,7 +5,7 @@ schemas come from the file itself, as Foxglove reads them):
   - the topics carry Foxglove's well-known schemas: /tf foxglove.FrameTransform, /rigpose/pose
     foxglove.PoseInFrame, /rigpose/trajectory foxglove.PosesInFrame, /rigpose/rig
     foxglove.SceneUpdate (and /rigpose/camK/image foxglove.RawImage, .../annotations
-    foxglove.ImageAnnotations with --images);
+    foxglove.ImageAnnotations with --images, with the tracked features as points);
   - every pose is there as a world -> cam1 transform, in order: N of them (--expect), seq S,
     S+1, ... in /rigpose/pose_info, and with --lcm-log, each transform equal to the pose_t of the
     recording (position and quaternion, to 1e-12);
@@ -38,6 +38,7 @@ def main():
         (passed if cond else failed)[0] += 1
 
     schemas, tfs, poses, infos, traj_len, images, anns = {}, [], 0, [], 0, {}, {}
+    npts = [0]  # feature points drawn over all annotations
     with open(a.mcap, "rb") as f:
         reader = make_reader(f)
         factory, decoders = DecoderFactory(), {}
@@ -63,6 +64,7 @@ def main():
                 images[t] = images.get(t, 0) + 1
             elif t.endswith("/annotations"):
                 anns[t] = anns.get(t, 0) + 1
+                npts[0] += sum(len(p.points) for p in proto.points)
     want = dict(WANT)
     if a.images:
         for t in images:
@@ -71,6 +73,7 @@ def main():
         check("camera images present", len(images) > 0, str(images))
         check("an annotation per image", all(anns.get(t.replace("/image", "/annotations")) == n
                                              for t, n in images.items()), str(anns))
+        check("tracked features drawn: %d points" % npts[0], npts[0] > 0)
     for t, name in sorted(want.items()):
         check("topic %s has schema %s" % (t, name), schemas.get(t) == name,
               "" if schemas.get(t) == name else "found %s" % schemas.get(t))

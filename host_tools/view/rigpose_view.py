@@ -13,7 +13,8 @@ Topics (Foxglove's well-known schemas, host_tools/view/README.md):
   /rigpose/trajectory       foxglove.PosesInFrame     every pose so far (thinned past --max-trajectory)
   /rigpose/rig              foxglove.SceneUpdate      each rig camera as a frustum, in cam1's frame
   /rigpose/camK/image       foxglove.RawImage         mono8 image of camera K (image channel on)
-  /rigpose/camK/annotations foxglove.ImageAnnotations camera K's features used, drawn on its image
+  /rigpose/camK/annotations foxglove.ImageAnnotations camera K's tracked features (the daemon's
+                                                      rigpose.features_t) drawn on its image
   /rigpose/pose_info        JSON  seq, flags, features used per camera, landmarks, error vs truth
   /rigpose/status           JSON  status_t: per-camera fps, features, drops; latency; filter health
 Conventions are the daemon's (docs/design.md): the world is cam1's frame at the first frame
@@ -34,11 +35,11 @@ from foxglove.channels import (FrameTransformChannel, ImageAnnotationsChannel,
 import lcm
 
 try:
-    from rigpose import image_t, pose_t, status_t
+    from rigpose import features_t, image_t, pose_t, status_t
 except ImportError:  # the build's generated package beside this tool's folder
     sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                     "..", "..", "build", "lcmgen", "python"))
-    from rigpose import image_t, pose_t, status_t
+    from rigpose import features_t, image_t, pose_t, status_t
 
 METHODS = {pose_t.METHOD_STEREO4: "stereo4", pose_t.METHOD_STEREO2: "stereo2",
            pose_t.METHOD_GC: "gc", pose_t.METHOD_CAM1: "cam1", pose_t.METHOD_CAM2: "cam2",
@@ -121,6 +122,8 @@ class View:
         self.pose_info = foxglove.Channel("/rigpose/pose_info", message_encoding="json")
         self.status = foxglove.Channel("/rigpose/status", message_encoding="json")
         self.images = {}
+        self.image_stamp = {}  # camera -> (seq, t_ns) of its latest image
+        self.n_features = 0
         self.rig_logged_ns = None
 
     @staticmethod
@@ -232,13 +235,38 @@ class View:
         img_ch.log(fm.RawImage(timestamp=ts, frame_id=name, width=m.width, height=m.height,
                                encoding="mono8", step=m.width, data=bytes(m.data)),
                    log_time=t_ns)
-        used = self.features_used.get(k)
-        label = "%s  set %d  features used %s" % (name, m.seq, "-" if used is None else used)
-        ann_ch.log(fm.ImageAnnotations(texts=[fm.TextAnnotation(
-            timestamp=ts, position=fm.Point2(x=8.0, y=20.0), text=label, font_size=16.0,
-            text_color=fm.Color(r=1.0, g=1.0, b=0.2, a=1.0),
-            background_color=fm.Color(r=0.0, g=0.0, b=0.0, a=0.6))]), log_time=t_ns)
+        self.image_stamp[k] = (m.seq, t_ns)
         self.n_images += 1
+
+    def on_features(self, data, t_ns):
+        """A camera's tracked features (rigpose.features_t, published after its image): drawn on
+        that image, stamped with the image's time so Foxglove pairs them."""
+        m = features_t.decode(data)
+        k = m.cam
+        name = self.rig[k]["name"] if 0 <= k < len(self.rig) else "cam%d" % (k + 1)
+        if k not in self.images:
+            self.images[k] = (RawImageChannel("/rigpose/%s/image" % name),
+                              ImageAnnotationsChannel("/rigpose/%s/annotations" % name))
+        seq_t = self.image_stamp.get(k)
+        if seq_t is not None and seq_t[0] == m.seq:
+            t_ns = seq_t[1]
+        ts = self.stamp(t_ns)
+        # rigpose's pixel origin is the centre of the top-left pixel, Foxglove's its corner.
+        pts = [fm.Point2(x=m.u[i] + 0.5, y=m.v[i] + 0.5) for i in range(m.n)]
+        used = self.features_used.get(k)
+        label = "%s  set %d  %d tracked, %s used" % (name, m.seq, m.n,
+                                                     "-" if used is None else used)
+        self.images[k][1].log(fm.ImageAnnotations(
+            points=[fm.PointsAnnotation(timestamp=ts, type=fm.PointsAnnotationType.Points,
+                                        points=pts, thickness=4.0,
+                                        outline_color=fm.Color(r=0.1, g=1.0, b=0.3, a=1.0),
+                                        fill_color=fm.Color(r=0.1, g=1.0, b=0.3, a=1.0))],
+            texts=[fm.TextAnnotation(timestamp=ts, position=fm.Point2(x=8.0, y=20.0),
+                                     text=label, font_size=16.0,
+                                     text_color=fm.Color(r=1.0, g=1.0, b=0.2, a=1.0),
+                                     background_color=fm.Color(r=0.0, g=0.0, b=0.0, a=0.6))]),
+            log_time=t_ns)
+        self.n_features += m.n
 
 
 def main(argv=None):
@@ -248,7 +276,8 @@ def main(argv=None):
     ap.add_argument("--pose-channel", default="RIGPOSE_POSE")
     ap.add_argument("--status-channel", default="RIGPOSE_STATUS")
     ap.add_argument("--image-channel", default="RIGPOSE_IMAGE",
-                    help="rigpose.image_t channel (the daemon's lcm.image_channel)")
+                    help="rigpose.image_t channel (the daemon's lcm.image_channel); its tracked "
+                         "features (rigpose.features_t) come on NAME_FEATURES")
     ap.add_argument("--config", help="the daemon's configuration file: rig cameras for the frusta")
     ap.add_argument("--port", type=int, default=8765, help="WebSocket port on 127.0.0.1")
     ap.add_argument("--mcap", metavar="FILE", help="write an MCAP file instead of serving")
@@ -286,6 +315,8 @@ def main(argv=None):
             view.on_status(data, t_ns)
         elif channel == a.image_channel:
             view.on_image(data, t_ns)
+        elif channel == a.image_channel + "_FEATURES":
+            view.on_features(data, t_ns)
 
     if a.lcm_log:
         log = lcm.EventLog(a.lcm_log, "r")
@@ -307,7 +338,8 @@ def main(argv=None):
         def handler(channel, data):
             last[0] = time.monotonic()
             dispatch(channel, data, time.time_ns())
-        for ch in (a.pose_channel, a.status_channel, a.image_channel):
+        for ch in (a.pose_channel, a.status_channel, a.image_channel,
+                   a.image_channel + "_FEATURES"):
             lc.subscribe(ch, handler)
         if a.ready:
             open(a.ready, "w").close()
@@ -329,8 +361,9 @@ def main(argv=None):
     else:
         time.sleep(0.5)  # let the server send what it holds before it closes the connections
         sink.stop()
-    say("rigpose-view: %d poses (last seq %s), %d images%s" % (
-        view.n_poses, view.last_seq, view.n_images, " -> " + a.mcap if a.mcap else ""))
+    say("rigpose-view: %d poses (last seq %s), %d images, %d features%s" % (
+        view.n_poses, view.last_seq, view.n_images, view.n_features,
+        " -> " + a.mcap if a.mcap else ""))
     return 0
 
 
