@@ -62,6 +62,8 @@ static rp_config_t g_cfg;
 static rp_est_t g_est;      /* the image pipeline: images, or features from the sim source */
 static rp_hal_set_t g_set;
 static rp_stats_t g_stats;
+/* The features' channel: the image channel's name + "_FEATURES" (lcm_types/rigpose_features_t). */
+static char g_feat_channel[RP_CFG_CHANNEL_MAX + 16];
 
 static void on_signal(int sig)
 {
@@ -242,6 +244,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
     rp_estimate_t est;
     memset(&est, 0, sizeof est);
     uint32_t grab_errors = 0;
+    (void)snprintf(g_feat_channel, sizeof g_feat_channel, "%s_FEATURES", g_cfg.image_channel);
 
     while (!g_stop && (o->frames == 0 || g_stats.n_sets < o->frames)) {
         const int32_t seq = (int32_t)g_stats.n_sets;
@@ -292,6 +295,12 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
                 fprintf(stderr, "rigpose: LCM image of camera %d (%s) on %s: %s\n", bad_cam,
                         bad_cam >= 0 ? g_cfg.cam_name[bad_cam] : "?", g_cfg.image_channel,
                         rp_pub_status_str(is));
+            }
+            const rp_pub_status_t fst = fs == NULL ? RP_PUB_OK
+                : rp_pub_set_features(lcm, g_feat_channel, fs, g_cfg.rig.n_cams, seq, &bad_cam);
+            if (fst != RP_PUB_OK) {
+                fprintf(stderr, "rigpose: LCM features of camera %d on %s: %s\n", bad_cam,
+                        g_feat_channel, rp_pub_status_str(fst));
             }
         }
         const float proc_ms = (float)((double)(t_pub - t_grab) * 1e-3);
