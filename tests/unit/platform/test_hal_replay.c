@@ -1,7 +1,11 @@
 /*
  * test_hal_replay.c - the HAL's dispatch (rp_hal_common.c) and its replay source on folders the
- * test writes: PGM and PNG images, truth, pacing, and each kind of bad input with its error.
+ * test writes: PGM and PNG images, truth, pacing, and each kind of bad input with its error:
+ * lines of any length (comments skipped whole, long rows refused naming file:line), FIFOs,
+ * devices and folders listed as images refused without blocking, a missing image costing only
+ * its camera, pacing at the ends of int64, control characters escaped in messages.
  */
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -329,6 +333,201 @@ static void test_replay_realtime(void **state)
     rp_hal_close(src);
 }
 
+/* Every byte of the message is printable ASCII (control characters escaped). */
+static void assert_printable(const char *msg)
+{
+    for (const unsigned char *p = (const unsigned char *)msg; *p != '\0'; p++) {
+        if (*p < 0x20 || *p >= 0x7f) {
+            fail_msg("byte 0x%02x in message: %s", *p, msg);
+        }
+    }
+}
+
+/* Comments are skipped whole however long (a 100 KB one, and one whose tail beyond 1,599
+ * characters is a valid row); a data row longer than the limit, or with a NUL byte, is refused
+ * naming file:line, and the next grab goes on with the next row. */
+static void test_replay_lines_of_any_length(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    char p[256];
+    snprintf(p, sizeof p, "%s/frames.csv", g_dir);
+    FILE *f = fopen(p, "w");
+    assert_non_null(f);
+    fputs("utime_us,cam0\n10,x.pgm\n#", f);                 /* lines 1, 2 */
+    for (int i = 0; i < 100000; i++) {                       /* line 3: 100 KB comment */
+        fputc('c', f);
+    }
+    fputs("\n20,x.pgm\n#", f);                               /* line 4 */
+    for (int i = 0; i < 1598; i++) {                         /* line 5: tail is a row */
+        fputc('c', f);
+    }
+    fputs("25,x.pgm\n30,x.pgm\n40,", f);                     /* line 6 */
+    for (int i = 0; i < 2000; i++) {                         /* line 7: too long a row */
+        fputc('a', f);
+    }
+    fputs("\n50,x.pgm\n60,x.p", f);                          /* line 8 */
+    fputc('\0', f);                                          /* line 9: a NUL byte */
+    fputs("gm\n70,x.pgm", f);                                /* line 10, no newline */
+    fclose(f);
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    const int64_t want[3] = {10, 20, 30};
+    for (int j = 0; j < 3; j++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_true(set.utime == want[j]);
+        assert_string_equal(rp_hal_errmsg(src), "");
+    }
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    printf("long row: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:7: line longer than 1599 characters"));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 50);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    printf("NUL byte: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:9: NUL byte"));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 70);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    assert_non_null(strstr(rp_hal_errmsg(src), "end after 5 sets"));
+    rp_hal_close(src);
+
+    /* A header over the limit is refused at open, naming file:1. */
+    f = fopen(p, "w");
+    assert_non_null(f);
+    fputs("utime_us", f);
+    for (int i = 0; i < 1000; i++) {
+        fputs(",c", f);
+    }
+    fputs("\n", f);
+    fclose(f);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_FORMAT);
+    printf("long header: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "frames.csv:1: line longer than"));
+}
+
+/* A FIFO, a device and a folder listed as images are refused without opening them for reading
+ * (nothing blocks): their camera is MISSING in that set, the message names line, camera, file
+ * and why, and the other camera's image comes. frames.csv and truth.csv that are not regular
+ * files are refused at open. */
+static void test_replay_only_regular_files(void **state)
+{
+    (void)state;
+    alarm(20); /* a blocking open would hang: SIGALRM fails the test instead */
+    write_pgm("x.pgm", 0, W, H);
+    char p[256];
+    snprintf(p, sizeof p, "%s/fifo.pgm", g_dir);
+    assert_int_equal(mkfifo(p, 0600), 0);
+    snprintf(p, sizeof p, "%s/dir.pgm", g_dir);
+    assert_int_equal(mkdir(p, 0700), 0);
+    write_file("frames.csv", "utime_us,cam0,cam1\n10,x.pgm,fifo.pgm\n20,/dev/zero,x.pgm\n"
+                             "30,x.pgm,dir.pgm\n40,fifo.pgm,dir.pgm\n50,x.pgm,x.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    const struct {
+        int bad;
+        const char *what;
+    } rows[3] = {{1, "frames.csv:2: camera 1: "}, {0, "frames.csv:3: camera 0: /dev/zero: is a device"},
+                 {1, "frames.csv:4: camera 1: "}};
+    for (int j = 0; j < 3; j++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        printf("row %d: %s\n", j + 2, rp_hal_errmsg(src));
+        assert_non_null(strstr(rp_hal_errmsg(src), rows[j].what));
+        assert_int_equal(set.cam[rows[j].bad].flags, RP_HAL_CAM_MISSING);
+        assert_null(set.cam[rows[j].bad].img.data);
+        assert_int_equal(set.cam[1 - rows[j].bad].flags, RP_HAL_CAM_OK);
+        check_image(&set.cam[1 - rows[j].bad], 0);
+    }
+    assert_non_null(strstr(rp_hal_errmsg(src), "dir.pgm: is a directory"));
+    /* Neither image readable: the row fails, naming the first camera's file. */
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_OPEN);
+    printf("row 5: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:5: camera 0: "));
+    assert_non_null(strstr(rp_hal_errmsg(src), "fifo.pgm: is a FIFO, not a regular file"));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_string_equal(rp_hal_errmsg(src), "");
+    assert_int_equal(set.cam[0].flags | set.cam[1].flags, RP_HAL_CAM_OK);
+    rp_hal_close(src);
+
+    /* frames.csv a folder, truth.csv a FIFO. */
+    snprintf(p, sizeof p, "%s/sub", g_dir);
+    assert_int_equal(mkdir(p, 0700), 0);
+    snprintf(p, sizeof p, "%s/sub/frames.csv", g_dir);
+    assert_int_equal(mkdir(p, 0700), 0);
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/sub", g_dir);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("frames.csv a folder: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "sub/frames.csv: is a directory"));
+    snprintf(p, sizeof p, "%s/truth.csv", g_dir);
+    assert_int_equal(mkfifo(p, 0600), 0);
+    cfg = replay_cfg(2);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("truth.csv a FIFO: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "truth.csv: is a FIFO"));
+    alarm(0);
+}
+
+/* Pacing at the ends of int64: no overflow (UBSan would stop the test), the far set is a
+ * timeout after timeout_ms, never a sleep of centuries. */
+static void test_replay_pacing_saturates(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0\n-9223372036854775807,x.pgm\n"
+                             "9223372036854775807,x.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    cfg.realtime = 1;
+    cfg.timeout_ms = 50;
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == -INT64_MAX);
+    const int64_t t0 = rp_hal_now_us();
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_TIMEOUT);
+    const int64_t dt = rp_hal_now_us() - t0;
+    printf("far set: %s (after %.1f ms)\n", rp_hal_errmsg(src), (double)dt / 1000.0);
+    assert_true(dt >= 50000 && dt < 1000000);
+    rp_hal_close(src);
+}
+
+/* A missing image costs only its camera; control characters in a path come out escaped. */
+static void test_replay_missing_image_one_camera(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0,cam1\n10,x.pgm,x.pgm\n20,x.pgm,gone\x1b[31m\t.pgm\n"
+                             "30,x.pgm,x.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    printf("missing image of camera 1: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:3: camera 1: "));
+    assert_non_null(strstr(rp_hal_errmsg(src), "gone\\x1b[31m\\x09.pgm: No such file"));
+    assert_printable(rp_hal_errmsg(src));
+    assert_true(set.utime == 20 && set.seq == 1);
+    assert_int_equal(set.cam[0].flags, RP_HAL_CAM_OK);
+    check_image(&set.cam[0], 0);
+    assert_int_equal(set.cam[1].flags, RP_HAL_CAM_MISSING);
+    assert_null(set.cam[1].img.data);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_string_equal(rp_hal_errmsg(src), "");
+    assert_int_equal(set.cam[1].flags, RP_HAL_CAM_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    rp_hal_close(src);
+}
+
 /* The dispatch: bad arguments, one source at a time, status strings. */
 static void test_hal_dispatch(void **state)
 {
@@ -371,6 +570,11 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_replay_malformed_images, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_named_columns, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_realtime, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_lines_of_any_length, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_only_regular_files, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_pacing_saturates, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_missing_image_one_camera, setup_dir,
+                                        remove_dir),
         cmocka_unit_test_setup_teardown(test_hal_dispatch, setup_dir, remove_dir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
