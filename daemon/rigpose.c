@@ -172,6 +172,7 @@ static rp_hal_status_t source_open(const rp_config_t *cfg, rp_hal_source_t **src
 {
     static rp_hal_sim_opts_t so; /* read by rp_hal_open only */
     rp_hal_cfg_t hc = cfg->hal;
+    hc.partial_sets = 1; /* replay: an unreadable image costs its camera only, not the set */
     if (hc.kind == RP_HAL_SRC_SIM) {
         so = rp_hal_sim_default_opts();
         so.noise_px = cfg->sim.noise_px;

@@ -17,10 +17,11 @@
  * Sets come as fast as they are asked for, or with cfg.realtime at their recorded spacing
  * (the first one at once; a gap longer than timeout_ms gives RP_HAL_E_TIMEOUT after timeout_ms
  * and the set comes at a later grab, so grab never blocks longer than timeout_ms). set.utime and each camera's utime are the recorded times; seq is the
- * row's index among the data rows. A row whose image cannot be read for some cameras is delivered
- * with those cameras MISSING (no image) and RP_HAL_OK, the reason (file:line, camera, file, why)
- * left in the source's message; a row none of whose images can be read, or a malformed row,
- * returns its error naming file and line; the next grab goes on with the next row.
+ * row's index among the data rows. With cfg.partial_sets, a row whose image cannot be read for
+ * some cameras is delivered with those cameras MISSING (no image) and RP_HAL_OK, the reason
+ * (file:line, camera, file, why) left in the source's message; a row none of whose images can be
+ * read (any, without partial_sets), or a malformed row, returns its error naming file and line;
+ * the next grab goes on with the next row.
  * Only regular files are read (frames.csv, truth.csv, images): a FIFO, device or directory
  * listed as an image is refused without opening it for reading, so nothing blocks. Pacing
  * arithmetic saturates: any int64 utime is safe.
@@ -560,7 +561,7 @@ static rp_hal_status_t read_row(replay_src_t *s)
             memcpy(s->ready_msg, s->err, RP_HAL_ERR_MAX);
         }
     }
-    if (n_bad == n) { /* nothing to deliver: the row fails (the first camera's reason) */
+    if (n_bad == n || (n_bad > 0 && !s->cfg.partial_sets)) { /* the row fails (first reason) */
         memcpy(s->err, s->ready_msg, RP_HAL_ERR_MAX);
         s->ready_msg[0] = '\0';
         return first_bad;

@@ -84,6 +84,11 @@ typedef struct {
     uint32_t sim_frames;                 /* sim: frames in the run (0 = the protocol's 100) */
     uint8_t sim_layout;                  /* sim: 0 = both stereo pairs (4 cams), 1 = four singles */
     uint8_t realtime;                    /* replay / sim: pace sets at their timestamps */
+    uint8_t partial_sets;                /* replay: a row whose image cannot be read for some
+                                          * cameras comes as a set with those cameras MISSING
+                                          * (RP_HAL_OK, the reason in rp_hal_errmsg) - the
+                                          * daemon; 0: the row fails with its first camera's
+                                          * error (a recorder wants whole sets) */
     const struct rp_hal_sim_opts *sim_opts; /* sim: pixel noise, a vanishing camera
                                              * (rp_hal_sim.h); NULL: the protocol's defaults.
                                              * Read by rp_hal_open only */

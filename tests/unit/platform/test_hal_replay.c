@@ -426,6 +426,7 @@ static void test_replay_only_regular_files(void **state)
     write_file("frames.csv", "utime_us,cam0,cam1\n10,x.pgm,fifo.pgm\n20,/dev/zero,x.pgm\n"
                              "30,x.pgm,dir.pgm\n40,fifo.pgm,dir.pgm\n50,x.pgm,x.pgm\n");
     rp_hal_cfg_t cfg = replay_cfg(2);
+    cfg.partial_sets = 1;
     rp_hal_source_t *src;
     rp_hal_set_t set;
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
@@ -498,7 +499,8 @@ static void test_replay_pacing_saturates(void **state)
     rp_hal_close(src);
 }
 
-/* A missing image costs only its camera; control characters in a path come out escaped. */
+/* With partial_sets a missing image costs only its camera (without, the row fails); control
+ * characters in a path come out escaped. */
 static void test_replay_missing_image_one_camera(void **state)
 {
     (void)state;
@@ -506,6 +508,7 @@ static void test_replay_missing_image_one_camera(void **state)
     write_file("frames.csv", "utime_us,cam0,cam1\n10,x.pgm,x.pgm\n20,x.pgm,gone\x1b[31m\t.pgm\n"
                              "30,x.pgm,x.pgm\n");
     rp_hal_cfg_t cfg = replay_cfg(2);
+    cfg.partial_sets = 1;
     rp_hal_source_t *src;
     rp_hal_set_t set;
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
@@ -525,6 +528,16 @@ static void test_replay_missing_image_one_camera(void **state)
     assert_string_equal(rp_hal_errmsg(src), "");
     assert_int_equal(set.cam[1].flags, RP_HAL_CAM_OK);
     assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    rp_hal_close(src);
+    /* Without partial_sets (a recorder wants whole sets) the row fails as a whole. */
+    cfg.partial_sets = 0;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_OPEN);
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:3: camera 1: "));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 30);
     rp_hal_close(src);
 }
 
