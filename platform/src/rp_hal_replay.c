@@ -23,8 +23,9 @@
  * read (any, without partial_sets), or a malformed row, returns its error naming file and line;
  * the next grab goes on with the next row.
  * Only regular files are read (frames.csv, truth.csv, images): a FIFO, device or directory
- * listed as an image is refused without opening it for reading, so nothing blocks. Pacing
- * arithmetic saturates: any int64 utime is safe.
+ * listed as an image is refused without opening it for reading, so nothing blocks. utime_us
+ * must lie within +-2^61 (any two differ by less than INT64_MAX); the pacing arithmetic
+ * saturates.
  */
 #include "rp_hal_priv.h"
 
@@ -40,6 +41,9 @@
 #include <png.h>
 
 #define LINE_MAX_CHARS (RP_MAX_CAMS * RP_HAL_PATH_MAX + 64) /* 1600 with the defaults */
+/* Largest |utime_us| of a row: the difference of any two fits int64_t (the estimators take
+ * the time between sets as a difference of utimes). */
+#define RP_HAL_UTIME_MAX ((int64_t)1 << 61)
 
 typedef struct {
     uint8_t open, started;
@@ -539,6 +543,12 @@ static rp_hal_status_t read_row(replay_src_t *s)
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
                            "%s/frames.csv:%u: want utime_us and %u image paths", s->dir,
                            (unsigned)s->line, (unsigned)s->n_cols);
+    }
+    if (u < -RP_HAL_UTIME_MAX || u > RP_HAL_UTIME_MAX) {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                           "%s/frames.csv:%u: utime_us %" PRId64 " outside +-2^61 us (73,000 "
+                           "years: beyond it the time between two sets overflows)",
+                           s->dir, (unsigned)s->line, u);
     }
     if (s->any_row && u <= s->last_u) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,

@@ -474,13 +474,15 @@ static void test_replay_only_regular_files(void **state)
     alarm(0);
 }
 
-/* Pacing at the ends of int64: no overflow (UBSan would stop the test), the far set is a
- * timeout after timeout_ms, never a sleep of centuries. */
+/* Pacing across the whole allowed range of times (+-2^61 us): no overflow (UBSan would stop
+ * the test), the far set is a timeout after timeout_ms, never a sleep of millennia; times
+ * beyond the range (differences could overflow in the estimators) are refused. */
 static void test_replay_pacing_saturates(void **state)
 {
     (void)state;
     write_pgm("x.pgm", 0, W, H);
     write_file("frames.csv", "utime_us,cam0\n-9223372036854775807,x.pgm\n"
+                             "-2305843009213693952,x.pgm\n2305843009213693952,x.pgm\n"
                              "9223372036854775807,x.pgm\n");
     rp_hal_cfg_t cfg = replay_cfg(1);
     cfg.realtime = 1;
@@ -489,13 +491,27 @@ static void test_replay_pacing_saturates(void **state)
     rp_hal_set_t set;
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
     assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    printf("too early: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:2: utime_us -9223372036854775807 outside"));
     assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
-    assert_true(set.utime == -INT64_MAX);
+    assert_true(set.utime == -((int64_t)1 << 61));
     const int64_t t0 = rp_hal_now_us();
     assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_TIMEOUT);
     const int64_t dt = rp_hal_now_us() - t0;
     printf("far set: %s (after %.1f ms)\n", rp_hal_errmsg(src), (double)dt / 1000.0);
     assert_true(dt >= 50000 && dt < 1000000);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_TIMEOUT); /* still due in millennia */
+    rp_hal_close(src);
+    cfg.realtime = 0;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == ((int64_t)1 << 61));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:5: utime_us 9223372036854775807"));
     rp_hal_close(src);
 }
 
