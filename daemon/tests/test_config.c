@@ -252,6 +252,10 @@ static const bad_case_t bad[] = {
     {3, "  kind: replay", RP_CFG_E_MISSING, "bad.yaml:3: source.replay_index: missing"},
     {4, "  timeout_ms: 500\n  timeout_ms: 600", RP_CFG_E_RANGE,
      "bad.yaml:5: source.timeout_ms: key given twice"},
+    {6, "  - name: \"le\\eft\"", RP_CFG_E_RANGE,
+     "bad.yaml:6: cameras[0].name: control character 0x1b at 2: 'le\\x1bft'"},
+    {7, "    device: \"/dev/video0\\n\"", RP_CFG_E_RANGE,
+     "bad.yaml:7: cameras[0].device: control character 0x0a at 11"},
     /* broken YAML */
     {10, "    intrinsics: [500, 500", RP_CFG_E_SYNTAX, "bad.yaml:11: (yaml):"},
     {6, "  - name: left\n   bad indent: 1", RP_CFG_E_SYNTAX, "bad.yaml:"},

@@ -296,6 +296,14 @@ static int get_str(ctx_t *c, const yaml_node_t *map, const char *path, const cha
     if (n->data.scalar.length == 0 && !allow_empty) {
         return fail(c, RP_CFG_E_RANGE, n, kp, "must not be empty");
     }
+    for (size_t i = 0; i < n->data.scalar.length; ++i) {
+        const unsigned char ch = n->data.scalar.value[i];
+        if (ch < 0x20 || ch == 0x7f) { /* names, paths and channels get printed and logged */
+            return fail(c, RP_CFG_E_RANGE, n, kp,
+                        "control character 0x%02x at %zu: '%s' (names, paths and channels are "
+                        "printed)", ch, i, scalar(n));
+        }
+    }
     memcpy(out, scalar(n), n->data.scalar.length);
     out[n->data.scalar.length] = '\0';
     return 0;
