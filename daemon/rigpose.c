@@ -83,6 +83,9 @@ typedef struct {
 
 static say_limit_t g_say_src;         /* the source's failure messages */
 static say_limit_t g_say_cam;         /* camera state changes */
+static say_limit_t g_say_est;         /* estimator changes */
+static rp_status_t g_said_est_st;     /* the estimator step's status as last printed */
+static uint8_t g_said_lost;           /* LOST as last printed */
 static int8_t g_said_state[RP_MAX_CAMS]; /* each camera's state as last printed (0: ok) */
 static uint32_t g_n_grab_failed, g_n_timeouts, g_n_degraded; /* for the closing line */
 
@@ -160,6 +163,30 @@ static void say_cam_changes(const rp_hal_set_t *set, int32_t seq)
         printf("rigpose: set %d: camera %d (%s): %s (reported on the status channel)", seq, k,
                g_cfg.cam_name[k], cam_state_str(st));
         say_not_shown(stdout, &g_say_cam);
+        putchar('\n');
+    }
+}
+
+/* One line when the estimator's step status or its LOST flag changes (rate-limited). */
+static void say_estimator_changes(int32_t seq, rp_status_t st, uint32_t flags)
+{
+    const uint8_t lost = (flags & RP_EST_LOST) != 0;
+    if (st != g_said_est_st && say_ok(&g_say_est, rp_hal_now_us())) {
+        if (st != RP_OK) {
+            printf("rigpose: set %d: estimator: step failed: %s", seq, rp_status_str(st));
+        } else {
+            printf("rigpose: set %d: estimator: steps ok again (was: %s)", seq,
+                   rp_status_str(g_said_est_st));
+        }
+        g_said_est_st = st;
+        say_not_shown(stdout, &g_say_est);
+        putchar('\n');
+    }
+    if (lost != g_said_lost && say_ok(&g_say_est, rp_hal_now_us())) {
+        printf("rigpose: set %d: estimator: %s", seq,
+               lost ? "LOST (the pose is not from the images; pose_t.flags)" : "tracking again");
+        g_said_lost = lost;
+        say_not_shown(stdout, &g_say_est);
         putchar('\n');
     }
 }
@@ -372,6 +399,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
 
         const rp_frameset_t *fs = NULL;
         const rp_status_t st = estimator_step(&g_set, &est, &fs);
+        say_estimator_changes(seq, st, est.flags);
 
         rigpose_pose_t pm;
         rp_pub_fill_pose(&pm, &g_set, &est, st, seq, g_cfg.rig.n_cams, method_code(&g_cfg));

@@ -11,7 +11,8 @@
 #     not exist, a file that is not a video device;
 #   while running (exit 0): one camera's missing image (only that camera reported missing, the
 #     set still published), a FIFO and a folder listed as images, a 100 KB comment, a comment
-#     whose tail is a row, a row longer than the limit, time going backwards;
+#     whose tail is a row, a row longer than the limit, time going backwards, blank images (the
+#     estimator's failure said once);
 #   source failed for good (exit 6): 60 malformed rows in a row, the messages rate-limited.
 set -u
 BUILD=${1:?usage: test_failures.sh BUILD}
@@ -19,7 +20,7 @@ ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$ROOT"
 DAEMON=$BUILD/release/rigpose
 TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
+trap '[ -n "${KEEP:-}" ] || rm -rf "$TMP"' EXIT
 pass=0; fail=0
 ok()  { echo "ok   $1"; pass=$((pass + 1)); }
 bad() { echo "FAIL $1"; fail=$((fail + 1)); }
@@ -158,6 +159,13 @@ B=$TMP/back; make_replay "$B" 4; sed -i '4s/^[0-9]*,/500,/' "$B/frames.csv"
 run back "$B/rig.yaml"
 check back "$(t '[ $rc -eq 0 ] && [ "$(poses back)" = 3 ] && has back "$B/frames.csv:4: utime_us 500 not after 34333"')" \
   "time going backwards: the row refused naming file:line"
+
+Z=$TMP/blank; make_replay "$Z" 20
+for f in "$Z"/c*.pgm; do { printf 'P5\n%d %d\n255\n' $W $H; head -c $((W * H)) /dev/zero; } >"$f"; done
+run blank "$Z/rig.yaml"
+n_est=$(grep -c "estimator: step failed" "$TMP/blank.out")
+check blank "$(t '[ $rc -eq 0 ] && [ "$(poses blank)" = 20 ] && [ $n_est = 1 ] && has_out blank "rigpose: set 0: estimator: step failed: " && has_out blank "rigpose: set 0: estimator: LOST"')" \
+  "20 blank sets: the estimator's failure said once ($n_est line), 20 poses published"
 
 # ---- failed for good: exit 6 ------------------------------------------------------------------
 G=$TMP/good; make_replay "$G" 2
