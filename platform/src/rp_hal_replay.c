@@ -1,7 +1,9 @@
 /*
  * rp_hal_replay.c - the HAL's replay source: recorded or rendered frame sets from a folder.
  *
- * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/research/realdata):
+ * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/research/realdata);
+ * cfg.replay_index is the folder (its frames.csv is read) or the index file itself, whatever
+ * its name (messages name the file read):
  *   frames.csv  header `utime_us,cam0,cam1,...`, then one row per frame set: the capture time in
  *               microseconds (strictly increasing) and each column's image, a path relative to
  *               the folder (or absolute). Camera i reads the column named cfg.cam[i].device, or
@@ -49,7 +51,8 @@ typedef struct {
     uint8_t open, started;
     rp_hal_cfg_t cfg;
     char *err;
-    char dir[RP_HAL_PATH_MAX];   /* folder of frames.csv */
+    char dir[RP_HAL_PATH_MAX];   /* folder of the index (image paths are relative to it) */
+    char index[2 * RP_HAL_PATH_MAX]; /* the index: DIR/frames.csv, or the file given */
     FILE *frames, *truth;
     uint32_t line, tline;        /* lines read so far in frames.csv / truth.csv */
     uint32_t row;                /* data rows read */
@@ -324,14 +327,14 @@ static rp_hal_status_t load_image(replay_src_t *s, uint8_t cam, const char *rel)
     const int n = rel[0] == '/' ? snprintf(s->path, sizeof s->path, "%s", rel)
                                 : snprintf(s->path, sizeof s->path, "%s/%s", s->dir, rel);
     if (n < 0 || (size_t)n >= sizeof s->path || rel[0] == '\0') {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: camera %u: %s path",
-                           s->dir, (unsigned)s->line, (unsigned)cam,
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: camera %u: %s path",
+                           s->index, (unsigned)s->line, (unsigned)cam,
                            rel[0] == '\0' ? "empty" : "too long a");
     }
     const char *why = NULL;
     FILE *f = open_regular(s->path, &why);
     if (f == NULL) {
-        return rp_hal_fail(s->err, RP_HAL_E_OPEN, "%s/frames.csv:%u: camera %u: %s: %s", s->dir,
+        return rp_hal_fail(s->err, RP_HAL_E_OPEN, "%s:%u: camera %u: %s: %s", s->index,
                            (unsigned)s->line, (unsigned)cam, s->path, why);
     }
     unsigned char magic[4] = {0, 0, 0, 0};
@@ -344,13 +347,13 @@ static rp_hal_status_t load_image(replay_src_t *s, uint8_t cam, const char *rel)
     }
     fclose(f);
     if (why != NULL) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: camera %u: %s: %s", s->dir,
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: camera %u: %s: %s", s->index,
                            (unsigned)s->line, (unsigned)cam, s->path, why);
     }
     const rp_hal_cam_cfg_t *cc = &s->cfg.cam[cam];
     if (cc->w != 0 && (s->w[cam] != cc->w || s->h[cam] != cc->h)) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s/frames.csv:%u: camera %u: %s: %ux%u, configured %ux%u", s->dir,
+                           "%s:%u: camera %u: %s: %ux%u, configured %ux%u", s->index,
                            (unsigned)s->line, (unsigned)cam, s->path, (unsigned)s->w[cam],
                            (unsigned)s->h[cam], (unsigned)cc->w, (unsigned)cc->h);
     }
@@ -385,7 +388,8 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
     s->err = err;
     char csv[2 * RP_HAL_PATH_MAX];
     struct stat st;
-    if (stat(idx, &st) == 0 && S_ISDIR(st.st_mode)) {
+    const int is_dir = stat(idx, &st) == 0 && S_ISDIR(st.st_mode);
+    if (is_dir) {
         (void)snprintf(s->dir, sizeof s->dir, "%s", idx);
     } else {
         const char *slash = strrchr(idx, '/');
@@ -399,7 +403,12 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
     while (dl > 1 && s->dir[dl - 1] == '/') {
         s->dir[--dl] = '\0';
     }
-    (void)snprintf(csv, sizeof csv, "%s/frames.csv", s->dir);
+    if (is_dir) {
+        (void)snprintf(s->index, sizeof s->index, "%s/frames.csv", s->dir);
+    } else { /* the file given, whatever its name (a renamed index is not silently replaced) */
+        (void)snprintf(s->index, sizeof s->index, "%s", idx);
+    }
+    (void)snprintf(csv, sizeof csv, "%s", s->index);
     const char *why = NULL;
     s->frames = open_regular(csv, &why);
     if (s->frames == NULL) {
@@ -529,11 +538,11 @@ static rp_hal_status_t read_row(replay_src_t *s)
     const uint8_t n = s->cfg.n_cams;
     const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
     if (r == 0) {
-        return rp_hal_fail(s->err, RP_HAL_E_END, "%s/frames.csv: end after %u sets", s->dir,
+        return rp_hal_fail(s->err, RP_HAL_E_END, "%s: end after %u sets", s->index,
                            (unsigned)s->row);
     }
     if (r < 0) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: %s", s->dir,
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: %s", s->index,
                            (unsigned)s->line, line_why(r));
     }
     char *f[RP_MAX_CAMS + 2];
@@ -541,18 +550,18 @@ static rp_hal_status_t read_row(replay_src_t *s)
     int64_t u = 0;
     if (k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s/frames.csv:%u: want utime_us and %u image paths", s->dir,
+                           "%s:%u: want utime_us and %u image paths", s->index,
                            (unsigned)s->line, (unsigned)s->n_cols);
     }
     if (u < -RP_HAL_UTIME_MAX || u > RP_HAL_UTIME_MAX) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s/frames.csv:%u: utime_us %" PRId64 " outside +-2^61 us (73,000 "
+                           "%s:%u: utime_us %" PRId64 " outside +-2^61 us (73,000 "
                            "years: beyond it the time between two sets overflows)",
-                           s->dir, (unsigned)s->line, u);
+                           s->index, (unsigned)s->line, u);
     }
     if (s->any_row && u <= s->last_u) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s/frames.csv:%u: utime_us %" PRId64 " not after %" PRId64, s->dir,
+                           "%s:%u: utime_us %" PRId64 " not after %" PRId64, s->index,
                            (unsigned)s->line, u, s->last_u);
     }
     s->any_row = 1;

@@ -269,6 +269,31 @@ static void test_replay_malformed_images(void **state)
     rp_hal_close(src);
 }
 
+/* replay_index naming a file reads that file, whatever its name; a renamed or missing index is
+ * named in the error (frames.csv beside it is not read instead). */
+static void test_replay_index_file_by_name(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0\n10,x.pgm\n");
+    write_file("index.csv", "utime_us,cam0\n20,x.pgm\nbad\n");
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/index.csv", g_dir);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 20);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    assert_non_null(strstr(rp_hal_errmsg(src), "index.csv:3: want utime_us"));
+    rp_hal_close(src);
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/renamed.csv", g_dir);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("renamed index: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "renamed.csv: No such file or directory"));
+}
+
 /* Given cameras naming their columns, each reads its own column whatever the order; columns no
  * camera names are skipped. */
 static void test_replay_named_columns(void **state)
@@ -598,6 +623,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_replay_malformed_csv, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_malformed_images, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_named_columns, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_index_file_by_name, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_realtime, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_lines_of_any_length, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_only_regular_files, setup_dir, remove_dir),
