@@ -343,6 +343,18 @@ static void test_hostile_files(void **state)
         printf("%d levels: %s\n", levels + 1, st == RP_CFG_OK ? "accepted" : g_err);
         assert_int_equal(st, levels == 31 ? RP_CFG_OK : RP_CFG_E_SYNTAX);
     }
+    /* 100,001 nodes under meta: refused; 90,000 accepted. */
+    for (int nodes = 90000; nodes <= 100001; nodes += 10001) {
+        n = (size_t)snprintf(text, sizeof text, "%smeta: [", edited(0, NULL));
+        for (int i = 0; i < nodes; ++i) {
+            n += (size_t)snprintf(text + n, sizeof text - n, "%s1", i ? "," : "");
+        }
+        snprintf(text + n, sizeof text - n, "]\n");
+        const rp_cfg_status_t st = parse(text);
+        printf("%d nodes under meta: %s\n", nodes, st == RP_CFG_OK ? "accepted" : g_err);
+        assert_int_equal(st, nodes == 90000 ? RP_CFG_OK : RP_CFG_E_SYNTAX);
+    }
+    assert_non_null(strstr(g_err, "bad.yaml:26: (yaml): more than 100000 nodes"));
     /* A second document, even a valid one. */
     snprintf(text, sizeof text, "%s---\n%s", edited(0, NULL), edited(0, NULL));
     assert_int_equal(parse(text), RP_CFG_E_SYNTAX);

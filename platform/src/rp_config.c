@@ -1103,7 +1103,7 @@ static rp_cfg_status_t yaml_error(const yaml_parser_t *parser, const char *name,
 }
 
 /* The first pass, over libyaml's events only (no document built, so it stops early and cheap):
- * nesting at most RP_CFG_MAX_DEPTH, one document. */
+ * nesting at most RP_CFG_MAX_DEPTH, at most RP_CFG_MAX_NODES nodes, one document. */
 static rp_cfg_status_t check_stream(const char *text, size_t len, const char *name, char *err,
                                     size_t err_len)
 {
@@ -1114,6 +1114,7 @@ static rp_cfg_status_t check_stream(const char *text, size_t len, const char *na
     yaml_parser_set_input_string(&parser, (const unsigned char *)text, len);
     rp_cfg_status_t st = RP_CFG_OK;
     int depth = 0, docs = 0, done = 0;
+    long nodes = 0;
     while (!done && st == RP_CFG_OK) {
         yaml_event_t e;
         if (!yaml_parser_parse(&parser, &e)) {
@@ -1132,6 +1133,19 @@ static rp_cfg_status_t check_stream(const char *text, size_t len, const char *na
             break;
         case YAML_SEQUENCE_END_EVENT:
         case YAML_MAPPING_END_EVENT: --depth; break;
+        default: break;
+        }
+        switch (e.type) {
+        case YAML_SCALAR_EVENT:
+        case YAML_ALIAS_EVENT:
+        case YAML_SEQUENCE_START_EVENT:
+        case YAML_MAPPING_START_EVENT:
+            if (st == RP_CFG_OK && ++nodes > RP_CFG_MAX_NODES) {
+                set_err(err, err_len, "%s:%lu: (yaml): more than %d nodes", name, line,
+                        RP_CFG_MAX_NODES);
+                st = RP_CFG_E_SYNTAX;
+            }
+            break;
         case YAML_DOCUMENT_START_EVENT:
             if (++docs > 1) {
                 set_err(err, err_len, "%s:%lu: (yaml): a second document; a configuration is "

@@ -18,7 +18,8 @@
  *
  * Hostile input: a file larger than RP_CFG_MAX_BYTES, nested deeper than RP_CFG_MAX_DEPTH
  * (anywhere, meta: included: libyaml's loader takes minutes on deep nesting, so a first pass
- * over libyaml's events stops at the limit) or holding a second YAML document is refused with
+ * over libyaml's events stops at the limit), with more than RP_CFG_MAX_NODES nodes (1 MiB of
+ * "1," under meta: took 83 MB to load) or holding a second YAML document is refused with
  * RP_CFG_E_SYNTAX before the document is built. Intrinsics outside a sane range and distortion
  * that folds or grossly stretches the image (checked over rays from the principal point to the
  * image border) are refused (RP_CFG_E_RANGE); config/README.md gives the rules.
@@ -56,6 +57,7 @@ const char *rp_cfg_status_str(rp_cfg_status_t s);
 #define RP_CFG_ERR_MAX 512     /* a useful size for the error buffer */
 #define RP_CFG_MAX_BYTES (1024 * 1024) /* largest file read */
 #define RP_CFG_MAX_DEPTH 32    /* deepest nesting of mappings and sequences */
+#define RP_CFG_MAX_NODES 100000 /* scalars, sequences, mappings and aliases in the file */
 
 /* The feature-level simulation behind the sim source (source.sim in the file). */
 typedef struct {
