@@ -540,6 +540,49 @@ static void test_single_camera_methods(void **state)
 
 /* No prefix of a valid file crashes the parser or passes half-read: each is either the full
  * file's result or an error with a message. */
+/* 3,000 corrupted copies of config/sim.yaml (1..8 bytes each replaced by a random byte, a
+ * control character, a bracket, a quote, a colon or a newline; a fixed seed): each accepted or
+ * refused with a printable "sim.yaml:LINE: ..." message, never a crash (ASan, UBSan). */
+static void test_corrupted_files_never_crash(void **state)
+{
+    (void)state;
+    static char orig[16384], text[16384];
+    FILE *f = fopen("config/sim.yaml", "rb");
+    assert_non_null(f);
+    const size_t n = fread(orig, 1, sizeof orig - 1, f);
+    fclose(f);
+    static const char special[] = "\n\t\r\x1b\x7f\xff\xc2[]{}'\":&*!|>%@`-#, 0";
+    uint32_t rng = 12345u;
+    unsigned ok = 0, refused = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+        memcpy(text, orig, n);
+        rng = rng * 1664525u + 1013904223u;
+        const unsigned edits = 1u + (rng >> 16) % 8u;
+        for (unsigned e = 0; e < edits; ++e) {
+            rng = rng * 1664525u + 1013904223u;
+            const size_t at = (size_t)(rng >> 8) % n;
+            rng = rng * 1664525u + 1013904223u;
+            text[at] = (rng >> 24) & 1 ? (char)(rng >> 16)
+                                       : special[(rng >> 8) % (sizeof special - 1)];
+        }
+        g_err[0] = '\0';
+        const rp_cfg_status_t st = rp_config_parse(text, n, "sim.yaml", &g_cfg, g_err,
+                                                   sizeof g_err);
+        if (st == RP_CFG_OK) {
+            ++ok;
+            continue;
+        }
+        ++refused;
+        if (strncmp(g_err, "sim.yaml:", 9) != 0) {
+            fail_msg("trial %d: status %d, message '%s'", trial, (int)st, g_err);
+        }
+        assert_printable(g_err);
+    }
+    printf("3000 corrupted copies of config/sim.yaml: %u accepted, %u refused with a printable "
+           "message\n", ok, refused);
+    assert_true(refused > 1000);
+}
+
 static void test_truncated_files_never_crash(void **state)
 {
     (void)state;
@@ -912,6 +955,7 @@ int main(void)
         cmocka_unit_test(test_replay_index_is_relative_to_the_file),
         cmocka_unit_test(test_single_camera_methods),
         cmocka_unit_test(test_truncated_files_never_crash),
+        cmocka_unit_test(test_corrupted_files_never_crash),
         cmocka_unit_test(test_minimal_file_is_the_core_default_for_every_layout),
         cmocka_unit_test(test_a_key_given_overrides_only_itself),
         cmocka_unit_test(test_readme_lists_the_core_defaults),

@@ -582,6 +582,74 @@ static void test_replay_missing_image_one_camera(void **state)
     rp_hal_close(src);
 }
 
+/* 2,000 corrupted copies of a small frames.csv (1..6 bytes each replaced by a random byte, a
+ * comma, a newline, '#', NUL, a path separator...; a fixed seed), each opened and grabbed to its
+ * end: every failure has a printable message naming frames.csv, nothing crashes (ASan, UBSan)
+ * or blocks, and at most one grab per line of the file. */
+static void test_replay_corrupted_index_never_crashes(void **state)
+{
+    (void)state;
+    alarm(120);
+    write_pgm("a.pgm", 0, W, H);
+    write_png("b.png", 1);
+    static const char orig[] = "utime_us,cam0,cam1\n10,a.pgm,b.png\n# note\n20,b.png,a.pgm\n"
+                               "\n30,a.pgm,a.pgm\n40,/dev/zero,b.png\n";
+    static const char special[] = ",\n#\r /.\x1b\xff-9";
+    const size_t n = sizeof orig - 1;
+    char text[sizeof orig];
+    uint32_t rng = 777u;
+    unsigned sets = 0, failures = 0;
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    cfg.partial_sets = 1;
+    char p[256];
+    snprintf(p, sizeof p, "%s/frames.csv", g_dir);
+    for (int trial = 0; trial < 2000; ++trial) {
+        memcpy(text, orig, n);
+        rng = rng * 1664525u + 1013904223u;
+        const unsigned edits = 1u + (rng >> 16) % 6u;
+        for (unsigned e = 0; e < edits; ++e) {
+            rng = rng * 1664525u + 1013904223u;
+            const size_t at = (size_t)(rng >> 8) % n;
+            rng = rng * 1664525u + 1013904223u;
+            const unsigned pick = (rng >> 24) % 3u;
+            text[at] = pick == 0 ? (char)(rng >> 16)
+                       : pick == 1 ? '\0'
+                                   : special[(rng >> 8) % (sizeof special - 1)];
+        }
+        FILE *f = fopen(p, "wb");
+        assert_non_null(f);
+        assert_int_equal(fwrite(text, 1, n, f), n);
+        fclose(f);
+        rp_hal_source_t *src;
+        rp_hal_set_t set;
+        const rp_hal_status_t so = rp_hal_open(&src, &cfg);
+        if (so != RP_HAL_OK) {
+            assert_non_null(strstr(rp_hal_errmsg(NULL), "frames.csv"));
+            assert_printable(rp_hal_errmsg(NULL));
+            failures++;
+            continue;
+        }
+        assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+        int grabs = 0;
+        rp_hal_status_t st;
+        while ((st = rp_hal_grab(src, &set)) != RP_HAL_E_END) {
+            assert_true(++grabs <= 12);
+            assert_printable(rp_hal_errmsg(src));
+            if (st == RP_HAL_OK) {
+                sets++;
+            } else {
+                failures++;
+                assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv"));
+            }
+        }
+        rp_hal_close(src);
+    }
+    alarm(0);
+    printf("2000 corrupted frames.csv: %u sets delivered, %u failures, each with its message\n",
+           sets, failures);
+    assert_true(sets > 1000 && failures > 1000);
+}
+
 /* The dispatch: bad arguments, one source at a time, status strings. */
 static void test_hal_dispatch(void **state)
 {
@@ -629,6 +697,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_replay_only_regular_files, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_pacing_saturates, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_missing_image_one_camera, setup_dir,
+                                        remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_corrupted_index_never_crashes, setup_dir,
                                         remove_dir),
         cmocka_unit_test_setup_teardown(test_hal_dispatch, setup_dir, remove_dir),
     };
