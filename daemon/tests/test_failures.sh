@@ -6,11 +6,12 @@
 # e.g. a FIFO opened as an image, fails the case instead of the test run).
 #   configuration (exit 2): a missing file, a key error, 100,000 nested levels under meta:, a
 #     second document, a distortion that folds inside the image, a terminal escape in a value;
-#   LCM (exit 3): an unknown provider;
+#   LCM (exit 3): an unknown provider; estimator (exit 5): a stereo pair without baseline;
 #   source open (exit 4): frames.csv missing, a folder, a bad header; a v4l2 device that does
 #     not exist, a file that is not a video device;
 #   while running (exit 0): one camera's missing image (only that camera reported missing, the
-#     set still published), a FIFO and a folder listed as images, a 100 KB comment, a comment
+#     set still published), images of the wrong size, a FIFO and a folder listed as images, a
+#     100 KB comment, a comment
 #     whose tail is a row, a row longer than the limit, time going backwards, blank images (the
 #     estimator's failure said once);
 #   source failed for good (exit 6): 60 malformed rows in a row, the messages rate-limited.
@@ -98,6 +99,12 @@ run lcm "$R/rig.yaml" --lcm-url 'bogus://nowhere'
 check lcm "$(t '[ $rc -eq 3 ] && has lcm "LCM: cannot use '"'"'bogus://nowhere'"'"'"')" \
   "unknown LCM provider: exit 3 naming the URL"
 
+# ---- estimator: exit 5 ------------------------------------------------------------------------
+sed 's/position: \[0.1, 0, 0\]/position: [0, 0, 0]/' "$R/rig.yaml" >"$R/nobase.yaml"
+run nobase "$R/nobase.yaml"
+check nobase "$(t '[ $rc -eq 5 ] && has nobase "rigpose: $R/nobase.yaml: method stereo2 refused the configuration: degenerate geometry"')" \
+  "a stereo pair without baseline: exit 5 naming the method and why"
+
 # ---- source open: exit 4 ----------------------------------------------------------------------
 mkdir -p "$TMP/empty"; sed 's#replay_index: frames.csv#replay_index: empty/frames.csv#' "$R/rig.yaml" \
     >"$TMP/noidx.yaml"
@@ -155,6 +162,11 @@ L=$TMP/long; make_replay "$L" 4
 run long "$L/rig.yaml"
 check long "$(t '[ $rc -eq 0 ] && [ "$(poses long)" = 4 ] && has long "$L/frames.csv:4: line longer than 1599 characters"')" \
   "a 2,000-character row: refused naming file:4, the other 4 sets published"
+S=$TMP/size; make_replay "$S" 3
+sed -i "0,/width: $W, height: $H, intrinsics: \[200, 200, 80, 60\]/! s/width: $W, height: $H, intrinsics: \[200, 200, 80, 60\]/width: 120, height: 100, intrinsics: [200, 200, 60, 50]/" "$S/rig.yaml"
+run size "$S/rig.yaml"
+check size "$(t '[ $rc -eq 0 ] && [ "$(poses size)" = 3 ] && has size "$S/frames.csv:2: camera 1: $S/c1_0.pgm: 160x120, configured 120x100" && has_out size "set 0: camera 1 (right): missing" && ! has_out size "camera 0 (left)"')" \
+  "camera 1's images of the wrong size: that camera missing, named with file:line and sizes"
 B=$TMP/back; make_replay "$B" 4; sed -i '4s/^[0-9]*,/500,/' "$B/frames.csv"
 run back "$B/rig.yaml"
 check back "$(t '[ $rc -eq 0 ] && [ "$(poses back)" = 3 ] && has back "$B/frames.csv:4: utime_us 500 not after 34333"')" \
