@@ -412,7 +412,9 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
     const char *why = NULL;
     s->frames = open_regular(csv, &why);
     if (s->frames == NULL) {
-        return rp_hal_fail(err, RP_HAL_E_OPEN, "%s: %s", csv, why);
+        return rp_hal_fail(err, RP_HAL_E_OPEN, "%s: %s%s%s%s", csv, why,
+                           is_dir ? " (replay_index " : "", is_dir ? idx : "",
+                           is_dir ? " is a folder: its frames.csv is read)" : "");
     }
     char *f[RP_MAX_CAMS + 2];
     const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);

@@ -490,6 +490,12 @@ static void test_replay_only_regular_files(void **state)
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
     printf("frames.csv a folder: %s\n", rp_hal_errmsg(NULL));
     assert_non_null(strstr(rp_hal_errmsg(NULL), "sub/frames.csv: is a directory"));
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/sub/frames.csv", g_dir);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("replay_index a folder named frames.csv: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "sub/frames.csv/frames.csv: No such file or "
+                                                "directory (replay_index "));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "sub/frames.csv is a folder: its frames.csv"));
     snprintf(p, sizeof p, "%s/truth.csv", g_dir);
     assert_int_equal(mkfifo(p, 0600), 0);
     cfg = replay_cfg(2);
