@@ -394,6 +394,7 @@ static void test_hostile_files(void **state)
     assert_int_equal(parse(edited(22, "  method: st\xff\xfe")), RP_CFG_E_SYNTAX); /* not UTF-8 */
     printf("invalid UTF-8: %s\n", g_err);
     assert_printable(g_err);
+    assert_non_null(strstr(g_err, "bad.yaml:22: (yaml): invalid leading UTF-8 octet at byte"));
 }
 
 /* Intrinsics: fx, fy within [0.1, 100] x the larger image side, fy / fx within [1/4, 4]. */

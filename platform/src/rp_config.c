@@ -1092,9 +1092,19 @@ static rp_cfg_status_t parse_doc(ctx_t *c, rp_config_t *cfg)
     return RP_CFG_OK;
 }
 
-static rp_cfg_status_t yaml_error(const yaml_parser_t *parser, const char *name, char *err,
-                                  size_t err_len)
+static rp_cfg_status_t yaml_error(const yaml_parser_t *parser, const char *text, size_t len,
+                                  const char *name, char *err, size_t err_len)
 {
+    if (parser->error == YAML_READER_ERROR) { /* bad encoding: libyaml gives a byte offset */
+        const size_t at = parser->problem_offset < len ? parser->problem_offset : len;
+        unsigned long line = 1;
+        for (size_t i = 0; i < at; ++i) {
+            line += text[i] == '\n';
+        }
+        set_err(err, err_len, "%s:%lu: (yaml): %s at byte %zu", name, line,
+                parser->problem ? parser->problem : "unreadable text", at);
+        return RP_CFG_E_SYNTAX;
+    }
     set_err(err, err_len, "%s:%lu: (yaml): %s%s%s", name,
             (unsigned long)parser->problem_mark.line + 1u,
             parser->problem ? parser->problem : "syntax error", parser->context ? " " : "",
@@ -1118,7 +1128,7 @@ static rp_cfg_status_t check_stream(const char *text, size_t len, const char *na
     while (!done && st == RP_CFG_OK) {
         yaml_event_t e;
         if (!yaml_parser_parse(&parser, &e)) {
-            st = yaml_error(&parser, name, err, err_len);
+            st = yaml_error(&parser, text, len, name, err, err_len);
             break;
         }
         const unsigned long line = (unsigned long)e.start_mark.line + 1u;
@@ -1189,7 +1199,7 @@ rp_cfg_status_t rp_config_parse(const char *text, size_t len, const char *name, 
     yaml_parser_set_input_string(&parser, (const unsigned char *)text, len);
     yaml_document_t doc;
     if (!yaml_parser_load(&parser, &doc)) {
-        st = yaml_error(&parser, name, err, err_len);
+        st = yaml_error(&parser, text, len, name, err, err_len);
     } else {
         ctx_t c = {name, &doc, err, err_len, RP_CFG_OK};
         st = parse_doc(&c, cfg);
