@@ -30,7 +30,8 @@
  * camera, device, errno): a failed open or start; each failed grab and each set delivered
  * with cameras missing for a reason (a replay image that could not be read, a v4l2 camera
  * lost), rate-limited (SAY_BURST lines, then one per SAY_EVERY_US, with the count of lines
- * not shown); and on stdout one line per change of a camera's state.
+ * not shown); and on stdout one line per change of a camera's state and of the estimator's
+ * step status or LOST flag (rate-limited alike).
  *
  * No heap in the per-frame path: every buffer is static or on the stack.
  */
@@ -109,8 +110,8 @@ static int say_ok(say_limit_t *l, int64_t now_us)
         l->started = 1;
         l->credit_us = full;
     } else if (now_us > l->t_us) {
-        l->credit_us = now_us - l->t_us >= full ? full : l->credit_us + (now_us - l->t_us);
-        l->credit_us = l->credit_us > full ? full : l->credit_us;
+        const int64_t earned = now_us - l->t_us;
+        l->credit_us = earned >= full - l->credit_us ? full : l->credit_us + earned;
     }
     l->t_us = now_us;
     if (l->credit_us >= SAY_EVERY_US) {
@@ -121,7 +122,7 @@ static int say_ok(say_limit_t *l, int64_t now_us)
     return 0;
 }
 
-/* ", N lines not shown" since the last line of l, once. */
+/* Appends how many lines of l were held back since its last line shown, if any. */
 static void say_not_shown(FILE *f, say_limit_t *l)
 {
     if (l->not_shown > 0) {
