@@ -140,8 +140,11 @@ void rp_hal_close(rp_hal_source_t *src);
 rp_hal_payload_t rp_hal_payload(const rp_hal_source_t *src);
 
 /* What went wrong in the source's last failing call, in words naming the device or file (and
- * line), e.g. "rec/frames.csv:7: want utime_us and 4 image paths"; "" if nothing failed. src NULL:
- * why the last rp_hal_open failed. Never NULL. */
+ * line, camera), e.g. "rec/frames.csv:7: want utime_us and 4 image paths"; "" if nothing
+ * failed. After a grab that returned RP_HAL_OK it is "" unless the set is degraded: then why its
+ * cameras are missing (a v4l2 camera lost, a replay image unreadable with partial_sets). Control
+ * characters and invalid UTF-8 echoed from files come escaped as \xNN. src NULL: why the last
+ * rp_hal_open failed. Never NULL. */
 const char *rp_hal_errmsg(const rp_hal_source_t *src);
 
 /* Clock (CLOCK_MONOTONIC, microseconds) and sleep. */
