@@ -442,6 +442,9 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
     if (lacking > 0) {
         est->flags |= RP_EST_DEGRADED;
     }
+    if (taken == 0) {
+        est->flags |= RP_EST_LOST; /* nothing measured, whatever the layout says (its start) */
+    }
     info->est_status = st;
     finish(pipe, est);
     return taken == 0 ? RP_E_DEGENERATE : st;
