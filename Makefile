@@ -137,7 +137,8 @@ $(REL)/rigpose-sim: host_tools/sim/rigpose_sim.c $(REL)/librigpose_sim.a $(REL)/
 # ---- the main job ----------------------------------------------------------------------------
 # The daemon on the embedded default (config/sim.yaml: the simulated rig of Table 1, stereo4,
 # paced at 30 Hz), printing poses with their error against the simulated truth and publishing
-# them on LCM; 300 frame sets (10 s) by default, RUN_ARGS= runs until Ctrl-C.
+# them on LCM; 300 frame sets (10 s) by default; RUN_ARGS="--frames N" runs N (the simulated run
+# is generated at start, up to 100,000 sets; Ctrl-C stops it earlier with the summary).
 RUN_ARGS ?= --frames 300
 run: deps $(REL)/rigpose
 	$(REL)/rigpose --config config/sim.yaml $(RUN_ARGS)

@@ -18,13 +18,16 @@
  *   rp_stats.h    what the status channel and the summary report
  *
  * Exit codes (daemon/README.md):
- *   0  done: --frames reached, the source ended, or SIGINT / SIGTERM
+ *   0  done: --frames reached, the source ended, or SIGINT / SIGTERM / SIGHUP / SIGPIPE (the
+ *      summary is printed; on SIGPIPE, stdout being gone, on stderr)
  *   1  usage error (bad command line)
  *   2  invalid configuration file (the message names file, line and key)
  *   3  LCM could not be set up (bad URL, no network for udpm)
  *   4  the camera source could not be opened or started (the HAL's message: device, file)
  *   5  the estimator refused the configuration (rig or method)
  *   6  the camera source failed for good while running (the last failure's message)
+ *   7  the --stats-json file could not be written at the end (it is tried at start too: a
+ *      path that cannot be written then is a usage error, 1)
  *
  * Every failure is said once, on stderr, in the HAL's words (rp_hal_errmsg: file and line,
  * camera, device, errno): a failed open or start; each failed grab and each set delivered
@@ -38,6 +41,7 @@
 #include <errno.h>
 #include <lcm/lcm.h>
 #include <signal.h>
+#include <unistd.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -56,7 +60,8 @@ enum {
     EXIT_LCM = 3,
     EXIT_SOURCE = 4,
     EXIT_ESTIMATOR = 5,
-    EXIT_SOURCE_FAILED = 6
+    EXIT_SOURCE_FAILED = 6,
+    EXIT_STATS = 7
 };
 
 /* Grab errors in a row (not timeouts) after which the source counts as failed for good. */
@@ -94,8 +99,7 @@ static uint32_t g_n_grab_failed, g_n_timeouts, g_n_degraded; /* for the closing 
 
 static void on_signal(int sig)
 {
-    (void)sig;
-    g_stop = 1;
+    g_stop = sig; /* SIGINT, SIGTERM, SIGHUP, SIGPIPE: all non-zero */
 }
 
 /* The configured method: its name, and its code in the messages (pose_t.METHOD_*). */
@@ -319,9 +323,11 @@ static int print_summary(rp_stats_t *st, const char *channel, const char *stats_
     rp_stats_summary_t s;
     rp_stats_summary(st, &s);
     printf("rigpose: %u poses published on %s, %.1f sets/s, latency frame->publish p50 %.3f ms, "
-           "p99 %.3f ms%s\n",
+           "p99 %.3f ms (all sets, 1 %% bins)%s\n",
            s.n_poses, channel, s.fps, s.lat_p50_ms, s.lat_p99_ms,
-           g_stop ? " (stopped by signal)" : "");
+           g_stop == SIGHUP ? " (stopped by signal SIGHUP)"
+           : g_stop == SIGPIPE ? " (stopped by signal SIGPIPE: stdout closed)"
+           : g_stop ? " (stopped by signal)" : "");
     if (s.n_err > 0) {
         printf("rigpose: mean abs error over sets 1..%u vs the source's truth: tx %.6f ty %.6f "
                "tz %.6f m, alpha %.6f beta %.6f gamma %.6f rad\n",
@@ -479,6 +485,14 @@ int main(int argc, char **argv)
     if (rp_args_apply(&o, &g_cfg, stderr) != RP_ARGS_OK) {
         return EXIT_USAGE;
     }
+    if (o.stats_json != NULL) { /* said now, not after the run */
+        FILE *f = fopen(o.stats_json, "a");
+        if (f == NULL) {
+            fprintf(stderr, "rigpose: --stats-json %s: %s\n", o.stats_json, strerror(errno));
+            return EXIT_USAGE;
+        }
+        fclose(f);
+    }
 
     const rp_status_t est_st = rp_est_init(&g_est, &g_cfg);
     if (est_st != RP_OK) {
@@ -505,6 +519,9 @@ int main(int argc, char **argv)
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGHUP, &sa, NULL);  /* a closed terminal: stop as for SIGTERM, with the summary */
+    sigaction(SIGPIPE, &sa, NULL); /* stdout piped into a reader that quit: the same, the
+                                    * summary on stderr (main) */
 
     printf("rigpose: %s: source %s, %u cameras, method %s, LCM %s (%s, %s)\n", o.config,
            g_cfg.hal.kind == RP_HAL_SRC_SIM ? "sim" : g_cfg.hal.kind == RP_HAL_SRC_V4L2 ? "v4l2"
@@ -530,6 +547,12 @@ int main(int argc, char **argv)
         }
         fputc('\n', stderr);
     }
-    (void)print_summary(&g_stats, g_cfg.pose_channel, o.stats_json);
+    if (g_stop == SIGPIPE) {
+        (void)dup2(STDERR_FILENO, STDOUT_FILENO); /* the summary where someone still reads */
+        clearerr(stdout);
+    }
+    if (print_summary(&g_stats, g_cfg.pose_channel, o.stats_json) != 0 && exit_code == EXIT_DONE) {
+        return EXIT_STATS;
+    }
     return exit_code;
 }

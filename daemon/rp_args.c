@@ -24,7 +24,8 @@ void rp_args_usage(FILE *f)
             "  --image-channel NAME  also publish every camera image (rigpose.image_t) there\n"
             "  --stats-json FILE     write daemon_latency_ms_p50/_p99 and daemon_fps to FILE\n"
             "exit codes: 0 done, 1 usage, 2 bad configuration, 3 LCM, 4 source open/start,\n"
-            "            5 estimator setup, 6 source failed while running\n");
+            "            5 estimator setup, 6 source failed while running, 7 --stats-json not\n"
+            "            written\n");
 }
 
 /* A decimal count 0..2^32-1, nothing else (no sign, no trailing characters). */

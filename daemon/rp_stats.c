@@ -42,6 +42,17 @@ void rp_stats_grab_failed(rp_stats_t *s, const rp_hal_set_t *set)
     }
 }
 
+/* The histogram bin of a latency (ms): floor(log_ratio(lat / min)), clamped. */
+static int lat_bin(float lat_ms)
+{
+    const double x = (double)lat_ms / RP_STATS_LAT_MIN_MS;
+    if (!(x > 1.0)) {
+        return 0; /* also NaN */
+    }
+    const double b = floor(log(x) / log(RP_STATS_LAT_RATIO));
+    return b >= (double)(RP_STATS_LAT_BINS - 1) ? RP_STATS_LAT_BINS - 1 : (int)b;
+}
+
 rp_status_t rp_stats_set(rp_stats_t *s, const rp_hal_set_t *set, const rp_estimate_t *est,
                          float lat_ms, int64_t t_pub_us, rp_stats_set_t *out)
 {
@@ -50,8 +61,9 @@ rp_status_t rp_stats_set(rp_stats_t *s, const rp_hal_set_t *set, const rp_estima
     }
     rp_stats_set_t r;
     memset(&r, 0, sizeof r);
-    if (s->n_lat < RP_STATS_LAT_KEEP) {
-        s->lat_ms[s->n_lat++] = lat_ms;
+    if (s->n_lat < UINT32_MAX) {
+        s->lat_hist[lat_bin(lat_ms)]++;
+        s->n_lat++;
     }
     if (s->n_sets == 0) {
         s->t_first_us = t_pub_us;
@@ -143,10 +155,20 @@ void rp_stats_fill_status(rp_stats_t *s, rigpose_status_t *m, const rp_hal_set_t
     s->lat_max_ms = 0.0f;
 }
 
-static int cmp_float(const void *a, const void *b)
+/* The p-quantile of the histogram: the centre of the bin holding the latency of rank
+ * floor(p (n - 1)) (0-based) in the sorted run. */
+static double lat_quantile(const rp_stats_t *s, double p)
 {
-    const float x = *(const float *)a, y = *(const float *)b;
-    return (x > y) - (x < y);
+    const uint64_t rank = (uint64_t)(p * (double)(s->n_lat - 1));
+    uint64_t cum = 0;
+    int b = 0;
+    for (; b < RP_STATS_LAT_BINS - 1; ++b) {
+        cum += s->lat_hist[b];
+        if (cum > rank) {
+            break;
+        }
+    }
+    return RP_STATS_LAT_MIN_MS * pow(RP_STATS_LAT_RATIO, (double)b + 0.5);
 }
 
 void rp_stats_summary(rp_stats_t *s, rp_stats_summary_t *out)
@@ -159,9 +181,8 @@ void rp_stats_summary(rp_stats_t *s, rp_stats_summary_t *out)
     const double span_s = (double)(s->t_last_us - s->t_first_us) * 1e-6;
     out->fps = (s->n_sets > 1 && span_s > 0.0) ? (double)(s->n_sets - 1) / span_s : 0.0;
     if (s->n_lat > 0) {
-        qsort(s->lat_ms, s->n_lat, sizeof s->lat_ms[0], cmp_float);
-        out->lat_p50_ms = (double)s->lat_ms[(s->n_lat - 1) / 2];
-        out->lat_p99_ms = (double)s->lat_ms[(size_t)((double)(s->n_lat - 1) * 0.99 + 0.5)];
+        out->lat_p50_ms = lat_quantile(s, 0.5);
+        out->lat_p99_ms = lat_quantile(s, 0.99);
     }
     out->n_err = s->n_err;
     for (int i = 0; i < 6 && s->n_err > 0; ++i) {

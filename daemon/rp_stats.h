@@ -3,7 +3,7 @@
  * frame counts and rates over the status period, latency, estimator events since start), the
  * run's latency record for the final percentiles, and the error against the source's truth.
  *
- * One rp_stats_t per run, kept static by the caller (it holds the latency record, 256 KiB).
+ * One rp_stats_t per run, kept static by the caller (it holds the latency histogram, 7.4 KiB).
  * No heap. The loop calls rp_stats_set for every published pose, rp_stats_grab_failed for every
  * failed grab, rp_stats_fill_status whenever it sends a status, rp_stats_summary at the end.
  */
@@ -17,8 +17,13 @@
 #include "rigpose/rp_status.h"
 #include "rigpose_status_t.h"
 
-/* Latencies kept for the final percentiles (the first ones, if the run is longer). */
-#define RP_STATS_LAT_KEEP 65536
+/* The run's latencies for the final percentiles: a histogram over the whole run, whatever its
+ * length, with bins growing by RP_STATS_LAT_RATIO from RP_STATS_LAT_MIN_MS (below it: the first
+ * bin; above the last bin's edge, about 160 s: the last bin). A percentile is reported as its
+ * bin's geometric centre, within half a bin (0.5 %) of every latency in that bin. */
+#define RP_STATS_LAT_BINS 1900
+#define RP_STATS_LAT_MIN_MS 0.001
+#define RP_STATS_LAT_RATIO 1.01
 
 typedef struct {
     /* what the status message says about the source (set at init) */
@@ -38,8 +43,8 @@ typedef struct {
     int8_t prev_state[RP_MAX_CAMS];     /* the same before the latest rp_stats_set */
     uint32_t n_sets;                    /* poses accounted (the next pose's seq) */
     int64_t t_first_us, t_last_us;      /* publish times of the first and latest pose */
-    uint32_t n_lat;
-    float lat_ms[RP_STATS_LAT_KEEP];    /* capture -> publish per pose, ms */
+    uint32_t n_lat;                     /* latencies in lat_hist (saturates at UINT32_MAX) */
+    uint32_t lat_hist[RP_STATS_LAT_BINS]; /* capture -> publish per pose, counts per bin */
     double err_sum[6];                  /* sum |estimate - truth| per axis over sets 1.. */
     uint32_t n_err;                     /* sets in err_sum */
 } rp_stats_t;

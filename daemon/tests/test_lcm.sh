@@ -6,7 +6,9 @@
 #      300-frame run in order, no gap in seq;
 #   3. lcm-logger records a run, lcm-logplayer replays the log into a subscriber: every pose;
 #   4. a camera that vanishes mid-run is reported on the status channel and poses keep coming;
-#   5. SIGTERM stops a running daemon cleanly (exit 0, summary printed).
+#   5. SIGTERM stops a running daemon cleanly (exit 0, summary printed);
+#   6. so do SIGHUP and SIGPIPE (stdout into a reader that quit: the summary on stderr); an
+#      unwritable --stats-json path is refused before the run (exit 1).
 # Channels carry this process's id, so concurrent runs on the same host do not mix.
 set -u
 BUILD=${1:?usage: test_lcm.sh BUILD}
@@ -111,6 +113,39 @@ if [ $rc -eq 0 ] && grep -q 'stopped by signal' "$TMP/dterm"; then
   ok "SIGTERM: exit 0 after ${ms} ms; $(grep 'poses published' "$TMP/dterm")"
 else
   bad "SIGTERM: exit $rc; $(cat "$TMP/dterm")"
+fi
+
+# ---- 6. SIGHUP, SIGPIPE, an unwritable --stats-json ----------------------------------------
+"$DAEMON" --config config/sim.yaml --frames 100000 --quiet --lcm-url "$URL" \
+    --pose-channel "P_${TAG}_H" --status-channel "S_${TAG}_H" >"$TMP/dhup" 2>&1 &
+DPID=$!
+sleep 1.5
+kill -HUP $DPID; wait $DPID; rc=$?
+if [ $rc -eq 0 ] && grep -q 'stopped by signal SIGHUP' "$TMP/dhup"; then
+  ok "SIGHUP: exit 0, summary printed"
+else
+  bad "SIGHUP: exit $rc; $(cat "$TMP/dhup")"
+fi
+# stdout into a reader that quits after one line: SIGPIPE at the next pose line
+set -o pipefail
+"$DAEMON" --config config/sim.yaml --frames 100000 --lcm-url "$URL" \
+    --pose-channel "P_${TAG}_P" --status-channel "S_${TAG}_P" 2>"$TMP/dpipe" | head -n 1 >/dev/null
+rc=$?
+set +o pipefail
+if [ $rc -eq 0 ] && grep -q 'stopped by signal SIGPIPE' "$TMP/dpipe" && grep -q 'poses published' "$TMP/dpipe"; then
+  ok "SIGPIPE: exit 0, the summary on stderr: $(grep 'poses published' "$TMP/dpipe" | cut -c1-60)..."
+else
+  bad "SIGPIPE: exit $rc; $(cat "$TMP/dpipe")"
+fi
+"$DAEMON" --config config/sim.yaml --frames 5 --quiet --lcm-url "$URL" \
+    --pose-channel "P_${TAG}_J" --status-channel "S_${TAG}_J" \
+    --stats-json /nonexistent-dir/stats.json >"$TMP/djson" 2>&1
+rc=$?
+if [ $rc -eq 1 ] && grep -q -- '--stats-json /nonexistent-dir/stats.json: No such file' "$TMP/djson" \
+   && ! grep -q 'poses published' "$TMP/djson"; then
+  ok "--stats-json to an unwritable path: exit 1 before running"
+else
+  bad "--stats-json unwritable: exit $rc; $(cat "$TMP/djson")"
 fi
 
 echo
