@@ -97,6 +97,56 @@ static uint8_t g_said_lost;           /* LOST as last printed */
 static int8_t g_said_state[RP_MAX_CAMS]; /* each camera's state as last printed (0: ok) */
 static uint32_t g_n_grab_failed, g_n_timeouts, g_n_degraded; /* for the closing line */
 
+/* ---- who publishes: lcm.instance, and another daemon on the same pose channel ---------------- */
+
+static int8_t g_instance[32];      /* pose_t.instance of this daemon, NUL-padded */
+static uint32_t g_n_foreign;       /* poses heard from another instance on our pose channel */
+static int g_listening;            /* subscribed to our own pose channel (udpm, memq) */
+static int8_t g_said_foreign[32];  /* the other instance last warned about */
+
+/* lcm.instance, or HOST:PID. */
+static void instance_init(const char *configured)
+{
+    char host[64] = "host";
+    char name[sizeof g_instance + 1];
+    if (configured[0] != '\0') {
+        snprintf(name, sizeof name, "%s", configured);
+    } else {
+        if (gethostname(host, sizeof host - 1) != 0) {
+            snprintf(host, sizeof host, "host");
+        }
+        host[sizeof host - 1] = '\0';
+        snprintf(name, sizeof name, "%.20s:%ld", host, (long)getpid());
+    }
+    memset(g_instance, 0, sizeof g_instance);
+    memcpy(g_instance, name, strnlen(name, sizeof g_instance - 1));
+}
+
+/* A pose heard on our own pose channel: ours (udpm loops back), or another daemon's. */
+static void on_pose_heard(const lcm_recv_buf_t *rbuf, const char *channel,
+                          const rigpose_pose_t *msg, void *user)
+{
+    (void)rbuf;
+    (void)user;
+    if (memcmp(msg->instance, g_instance, sizeof g_instance) == 0) {
+        return;
+    }
+    g_n_foreign++;
+    if (memcmp(msg->instance, g_said_foreign, sizeof g_said_foreign) != 0) {
+        memcpy(g_said_foreign, msg->instance, sizeof g_said_foreign);
+        char other[sizeof g_instance + 1];
+        for (size_t i = 0; i < sizeof g_instance; ++i) { /* printable only: it comes from outside */
+            const unsigned char ch = (unsigned char)msg->instance[i];
+            other[i] = ch == 0 ? '\0' : (ch < 0x20 || ch >= 0x7f) ? '?' : (char)ch;
+        }
+        other[sizeof g_instance] = '\0';
+        fprintf(stderr, "rigpose: another publisher (instance '%s') sends poses on %s, where this "
+                "daemon ('%.32s') publishes: their poses mix; give each its own "
+                "lcm.pose_channel (counted in status_t.n_foreign_poses)\n", other, channel,
+                (const char *)g_instance);
+    }
+}
+
 static void on_signal(int sig)
 {
     g_stop = sig; /* SIGINT, SIGTERM, SIGHUP, SIGPIPE: all non-zero */
@@ -354,8 +404,10 @@ static int print_summary(rp_stats_t *st, const char *channel, const char *stats_
 
 /* ---- the loop ---------------------------------------------------------------------------------- */
 
-static void publish_status(lcm_t *lcm, const rigpose_status_t *m)
+static void publish_status(lcm_t *lcm, rigpose_status_t *m)
 {
+    memcpy(m->instance, g_instance, sizeof m->instance);
+    m->n_foreign_poses = (int32_t)g_n_foreign;
     const rp_pub_status_t ps = rp_pub_status(lcm, g_cfg.status_channel, m);
     if (ps != RP_PUB_OK) {
         fprintf(stderr, "rigpose: LCM status on %s: %s\n", g_cfg.status_channel,
@@ -413,6 +465,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
 
         rigpose_pose_t pm;
         rp_pub_fill_pose(&pm, &g_set, &est, st, seq, g_cfg.rig.n_cams, method_code(&g_cfg));
+        memcpy(pm.instance, g_instance, sizeof pm.instance);
         const int64_t t_pub = rp_hal_now_us();
         pm.publish_utime = t_pub;
         const rp_pub_status_t ps = rp_pub_pose(lcm, g_cfg.pose_channel, &pm);
@@ -443,6 +496,10 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
             }
         }
         const float proc_ms = (float)((double)(t_pub - t_grab) * 1e-3);
+        if (g_listening) {
+            while (lcm_handle_timeout(lcm, 0) > 0) { /* what arrived on our pose channel */
+            }
+        }
 
         rp_stats_set_t r;
         (void)rp_stats_set(&g_stats, &g_set, &est, lat_ms, t_pub, &r);
@@ -506,6 +563,13 @@ int main(int argc, char **argv)
         fprintf(stderr, "rigpose: LCM: cannot use '%s'\n", g_cfg.lcm_url);
         return EXIT_LCM;
     }
+    instance_init(g_cfg.instance);
+    /* Listen on our own pose channel where a second publisher could be heard (not on a log
+     * file being written). */
+    if ((strncmp(g_cfg.lcm_url, "udpm://", 7) == 0 || strncmp(g_cfg.lcm_url, "memq://", 7) == 0) &&
+        rigpose_pose_t_subscribe(lcm, g_cfg.pose_channel, on_pose_heard, NULL) != NULL) {
+        g_listening = 1;
+    }
 
     rp_hal_source_t *src = NULL;
     if (source_open(&g_cfg, &src) != RP_HAL_OK) {
@@ -523,7 +587,8 @@ int main(int argc, char **argv)
     sigaction(SIGPIPE, &sa, NULL); /* stdout piped into a reader that quit: the same, the
                                     * summary on stderr (main) */
 
-    printf("rigpose: %s: source %s, %u cameras, method %s, LCM %s (%s, %s)\n", o.config,
+    printf("rigpose: %s: instance '%.32s', source %s, %u cameras, method %s, LCM %s (%s, %s)\n",
+           o.config, (const char *)g_instance,
            g_cfg.hal.kind == RP_HAL_SRC_SIM ? "sim" : g_cfg.hal.kind == RP_HAL_SRC_V4L2 ? "v4l2"
                                                                                      : "replay",
            g_cfg.rig.n_cams, method_name(&g_cfg), g_cfg.lcm_url, g_cfg.pose_channel,

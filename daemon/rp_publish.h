@@ -38,12 +38,13 @@ const char *rp_pub_status_str(rp_pub_status_t s);
 
 /* Largest encodings, bytes. */
 #define RP_PUB_HASH_BYTES 8
+#define RP_PUB_INSTANCE_BYTES 32 /* pose_t.instance, status_t.instance */
 #define RP_PUB_POSE_BYTES                                                                      \
     (RP_PUB_HASH_BYTES + 8 + 8 + 4 + 4 + 1 + 8 * (3 + 4 + 3 + 3 + 3 + 36) + 1 + 2 * 6 + 2 + 2 + \
-     4 + 4 + 1 + 8 * 6)
+     4 + 4 + 1 + 8 * 6 + RP_PUB_INSTANCE_BYTES)
 #define RP_PUB_STATUS_BYTES                                                                    \
     (RP_PUB_HASH_BYTES + 8 + 4 + 4 + 1 + 1 + 4 + 1 + 6 + 4 * 6 + 4 * 6 + 4 * 6 + 2 * 6 +      \
-     2 * 6 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 2 + 4 + 4)
+     2 * 6 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 2 + 4 + 4 + RP_PUB_INSTANCE_BYTES + 4)
 #define RP_PUB_IMAGE_HEAD_BYTES (RP_PUB_HASH_BYTES + 8 + 4 + 1 + 2 + 2 + 4)
 #define RP_PUB_IMAGE_BYTES (RP_PUB_IMAGE_HEAD_BYTES + (RP_HAL_MAX_W) * (RP_HAL_MAX_H))
 #define RP_PUB_FEATS_MAX 512 /* features_t's arrays */

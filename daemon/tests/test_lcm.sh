@@ -8,7 +8,8 @@
 #   4. a camera that vanishes mid-run is reported on the status channel and poses keep coming;
 #   5. SIGTERM stops a running daemon cleanly (exit 0, summary printed);
 #   6. so do SIGHUP and SIGPIPE (stdout into a reader that quit: the summary on stderr); an
-#      unwritable --stats-json path is refused before the run (exit 1).
+#      unwritable --stats-json path is refused before the run (exit 1);
+#   7. two daemons on one pose channel: each names the other's instance (pose_t.instance).
 # Channels carry this process's id, so concurrent runs on the same host do not mix.
 set -u
 BUILD=${1:?usage: test_lcm.sh BUILD}
@@ -146,6 +147,22 @@ if [ $rc -eq 1 ] && grep -q -- '--stats-json /nonexistent-dir/stats.json: No suc
   ok "--stats-json to an unwritable path: exit 1 before running"
 else
   bad "--stats-json unwritable: exit $rc; $(cat "$TMP/djson")"
+fi
+
+# ---- 7. two daemons on one pose channel ------------------------------------------------------
+for i in 1 2; do
+  "$DAEMON" --config config/sim.yaml --frames 60 --quiet --lcm-url "$URL" \
+      --pose-channel "P_${TAG}_2" --status-channel "S_${TAG}_2" >"$TMP/dtwo$i" 2>&1 &
+done
+wait
+i1=$(sed -n "s/.*instance '\([^']*\)', source.*/\1/p" "$TMP/dtwo1")
+i2=$(sed -n "s/.*instance '\([^']*\)', source.*/\1/p" "$TMP/dtwo2")
+if [ -n "$i1" ] && [ "$i1" != "$i2" ] && grep -q "another publisher (instance '$i2')" "$TMP/dtwo1" \
+   && grep -q "another publisher (instance '$i1')" "$TMP/dtwo2" \
+   && ! grep -q "another publisher" "$TMP/dterm" "$TMP/dhup"; then
+  ok "two daemons on one pose channel: each names the other ($i1, $i2); one alone says nothing"
+else
+  bad "two daemons: $(cat "$TMP/dtwo1" "$TMP/dtwo2")"
 fi
 
 echo

@@ -1043,7 +1043,7 @@ static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 static int parse_lcm(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 {
     static const char *const known[] = {"url", "pose_channel", "status_channel", "status_every",
-                                        "image_channel", NULL};
+                                        "image_channel", "instance", NULL};
     const char *P = "lcm";
     static const yaml_node_t none = {.type = YAML_MAPPING_NODE};
     yaml_node_t *m;
@@ -1061,6 +1061,7 @@ static int parse_lcm(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
                 sizeof cfg->status_channel) ||
         get_str(c, mm, P, "image_channel", 0, "", 1, cfg->image_channel,
                 sizeof cfg->image_channel) ||
+        get_str(c, mm, P, "instance", 0, "", 1, cfg->instance, sizeof cfg->instance) ||
         get_int(c, mm, P, "status_every", 0, 1, 1, 10000, &every)) {
         return -1;
     }

@@ -82,6 +82,8 @@ typedef struct {
     char status_channel[RP_CFG_CHANNEL_MAX];
     char image_channel[RP_CFG_CHANNEL_MAX]; /* "" = images not published */
     uint32_t status_every;                  /* frame sets between status messages, >= 1 */
+    char instance[32];                      /* lcm.instance: who publishes (pose_t.instance);
+                                             * "" = the daemon's default, HOST:PID */
 } rp_config_t;
 
 /* Read and check the file at path. On failure cfg is unspecified and err (err_len bytes, may be
