@@ -262,6 +262,7 @@ static rp_hal_status_t source_open(const rp_config_t *cfg, rp_hal_source_t **src
         so.noise_px = cfg->sim.noise_px;
         so.drop_cam = cfg->sim.drop_cam;
         so.drop_from = cfg->sim.drop_from;
+        so.motion = cfg->sim.motion;
         hc.sim_opts = &so;
     }
     rp_hal_status_t st = rp_hal_open(src, &hc);

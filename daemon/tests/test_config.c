@@ -140,6 +140,44 @@ static void test_embedded_default_is_the_simulated_rig(void **state)
     assert_int_equal(g_cfg.pipe.stereo.pair_b[1], RP_SIM_CAM3B);
     assert_int_equal(g_cfg.sim.drop_cam, -1);
     assert_near(g_cfg.sim.noise_px, 0.5, 1e-12);
+    assert_int_equal(g_cfg.sim.motion, 0); /* the paper's */
+    assert_string_equal(g_cfg.instance, ""); /* the daemon's HOST:PID */
+}
+
+/* source.sim.motion (paper, turn, pitch; another word refused naming it) and lcm.instance. */
+static void test_sim_motion_and_instance(void **state)
+{
+    (void)state;
+    static char text[16384];
+    FILE *f = fopen("config/sim.yaml", "r");
+    assert_non_null(f);
+    const size_t n = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[n] = '\0';
+    static const char *const words[4] = {"paper", "turn", "pitch", "spin"};
+    for (int w = 0; w < 4; ++w) {
+        static char edited_text[16640];
+        const char *at = strstr(text, "    noise_px: 0.5\n");
+        assert_non_null(at);
+        const size_t head = (size_t)(at - text) + strlen("    noise_px: 0.5\n");
+        snprintf(edited_text, sizeof edited_text, "%.*s    motion: %s\n%s", (int)head, text,
+                 words[w], text + head);
+        const rp_cfg_status_t st =
+            rp_config_parse(edited_text, strlen(edited_text), "m.yaml", &g_cfg, g_err,
+                            sizeof g_err);
+        if (w < 3) {
+            assert_int_equal(st, RP_CFG_OK);
+            assert_int_equal(g_cfg.sim.motion, w);
+        } else {
+            assert_int_equal(st, RP_CFG_E_RANGE);
+            assert_non_null(strstr(g_err, "source.sim.motion: 'spin' is not one of"));
+        }
+    }
+    static char with_instance[16640];
+    snprintf(with_instance, sizeof with_instance, "%s  instance: board-7\n", text);
+    assert_int_equal(rp_config_parse(with_instance, strlen(with_instance), "i.yaml", &g_cfg, g_err,
+                                     sizeof g_err), RP_CFG_OK);
+    assert_string_equal(g_cfg.instance, "board-7");
 }
 
 /* tracker.reset_share sets the tracker's reset (0 turns it off). */
@@ -948,6 +986,7 @@ int main(void)
         cmocka_unit_test(test_embedded_default_is_the_simulated_rig),
         cmocka_unit_test(test_angles_match_the_rotation_module),
         cmocka_unit_test(test_tracker_reset_share),
+        cmocka_unit_test(test_sim_motion_and_instance),
         cmocka_unit_test(test_gc_metric_scale_sigma),
         cmocka_unit_test(test_each_bad_file_names_line_and_key),
         cmocka_unit_test(test_whole_file_errors),

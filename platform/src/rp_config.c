@@ -646,9 +646,9 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     static const char *const known[] = {"kind",     "timeout_ms",   "sync_tol_us", "retry_ms",
                                         "realtime", "replay_index", "sim",         NULL};
     static const char *const sim_known[] = {"seed", "frames", "noise_px", "drop_cam",
-                                            "drop_from", NULL};
+                                            "drop_from", "motion", NULL};
     yaml_node_t *m, *sm;
-    char kind[16], rel[RP_HAL_PATH_MAX];
+    char kind[16], rel[RP_HAL_PATH_MAX], motion[16] = "paper";
     long long to, tol, retry, seed, frames, drop_cam, drop_from;
     if (get_map(c, root, "", "source", 1, &m) ||
         check_keys(c, m, "source", known) ||
@@ -692,6 +692,7 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         drop_cam = -1;
         drop_from = 0;
     } else if (check_keys(c, sm, "source.sim", sim_known) ||
+               get_str(c, sm, "source.sim", "motion", 0, "paper", 0, motion, sizeof motion) ||
                get_int(c, sm, "source.sim", "seed", 0, 1, 0, 4294967295LL, &seed) ||
                get_int(c, sm, "source.sim", "frames", 0, 0, 0, 100000, &frames) ||
                get_num(c, sm, "source.sim", "noise_px", 0, 0.5, 0.0, 0, 10.0, &cfg->sim.noise_px) ||
@@ -703,6 +704,13 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     cfg->sim.frames = (uint32_t)frames;
     cfg->sim.drop_cam = (int16_t)drop_cam;
     cfg->sim.drop_from = (uint32_t)drop_from;
+    if (strcmp(motion, "paper") == 0 || strcmp(motion, "turn") == 0 ||
+        strcmp(motion, "pitch") == 0) {
+        cfg->sim.motion = (int8_t)(motion[0] == 'p' ? (motion[1] == 'a' ? 0 : 2) : 1);
+    } else {
+        return fail(c, RP_CFG_E_RANGE, map_get(c, sm, "motion"), "source.sim.motion",
+                    "'%s' is not one of paper, turn, pitch", motion);
+    }
     cfg->hal.sim_seed = cfg->sim.seed;
     cfg->hal.sim_frames = cfg->sim.frames;
 

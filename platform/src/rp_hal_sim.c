@@ -36,6 +36,7 @@ rp_hal_sim_opts_t rp_hal_sim_default_opts(void)
     o.noise_px = 0.5;
     o.drop_cam = -1;
     o.drop_from = 0;
+    o.motion = (int8_t)RP_SIM_MOTION_PAPER;
     return o;
 }
 
@@ -62,12 +63,17 @@ static rp_hal_status_t sim_open(rp_hal_sim_t **sim, const rp_hal_cfg_t *cfg,
         return rp_hal_fail(err, RP_HAL_E_ARG, "sim: drop_cam %d out of -1..%d", (int)o.drop_cam,
                            RP_SIM_NCAMS - 1);
     }
+    if (o.motion < (int8_t)RP_SIM_MOTION_PAPER || o.motion > (int8_t)RP_SIM_MOTION_PITCH) {
+        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: motion %d is not 0 (paper), 1 (turn) or 2 "
+                           "(pitch)", (int)o.motion);
+    }
     if (g_sim.open) {
         return rp_hal_fail(err, RP_HAL_E_ARG, "sim: already open (one source per process)");
     }
     rp_sim_cfg_t sc;
     rp_sim_default_cfg(&sc);
     sc.noise_px = o.noise_px;
+    sc.motion = (rp_sim_motion_t)o.motion;
     if (cfg->sim_frames > 0) {
         sc.n_frames = cfg->sim_frames;
     }
