@@ -103,6 +103,7 @@ rp_status_t rp_lmtab_mark_ids(rp_lmtab_t *t, const uint32_t *ids, const uint8_t 
     for (uint32_t i = 0; i < n; ++i) {
         uint16_t s;
         if ((!used || used[i]) && rp_idmap_find(&t->map, ids[i], &s) == RP_OK) {
+            /* ignored: only NULL arguments fail */
             (void)rp_idmap_mark(&t->map, s);
         }
     }
@@ -129,6 +130,7 @@ rp_status_t rp_lmtab_refine(rp_lmtab_t *t, const rp_rig_t *rig, const rp_real p[
     for (uint32_t i = 0; i < n; ++i) {
         uint16_t s;
         if ((!used || used[i]) && rp_idmap_find(&t->map, ids[i], &s) == RP_OK) {
+            /* ignored: a point its gate refuses stays as it was (the gate, not a fault) */
             (void)rp_struct_update(&t->pt[s], rig, obs[i].cam, &pl, obs[i].uv, sigma_px,
                                    gate_chi2);
         }

@@ -128,6 +128,7 @@ rp_status_t rp_vo_fill_estimate(const rp_ekf_t *ekf, rp_real t_scale, int64_t ut
     if (rp_fabs(a[0]) > RP_PI || rp_fabs(a[1]) > RP_PI / RP_C(2.0) || rp_fabs(a[2]) > RP_PI) {
         rp_real R[9];
         rp_rot_from_angles(a, R);
+        /* ignored: only non-finite angles fail, and stay as they are */
         (void)rp_rot_to_angles(R, est->p + 3);
     }
     if (flags & RP_EST_LOST) {

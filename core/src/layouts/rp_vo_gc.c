@@ -60,6 +60,7 @@ static void lm_drop_lost(rp_vo_gc_t *vo, const uint8_t had_image[RP_MAX_CAMS])
     for (uint32_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
         mask |= had_image[cam] ? (1u << cam) : 0u;
     }
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_drop_unmarked(&vo->lm, mask, NULL);
 }
 
@@ -109,8 +110,10 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
     vo->cfg = *cfg;
     rp_vo_gc_set_mu(vo, RP_C(1.0));
     vo->ekf = idle;
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
+    /* ignored: only NULL arguments fail */
     (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
     return RP_OK;
 }
@@ -299,8 +302,10 @@ static int cam_in_layout(const rp_vo_gc_t *vo, uint8_t cam)
 static uint32_t gather_obs(rp_vo_gc_t *vo, const rp_frameset_t *fs)
 {
     uint32_t n = 0;
+    /* ignored: cannot fill: the cap holds a whole frame set */
     (void)rp_lmtab_gather(&vo->lm, fs, vo->cfg.cams, vo->cfg.n_cams, 1, vo->obs, vo->obs_id,
                           RP_VO_GC_MAX_OBS, &n);
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, NULL, n);
     return n;
 }
@@ -310,6 +315,7 @@ static void fill_estimate(const rp_vo_gc_t *vo, const rp_frameset_t *fs, uint32_
 {
     /* map units -> metres: translations and their velocities divided by mu */
     const rp_real im = RP_C(1.0) / vo->mu;
+    /* ignored: only NULL arguments fail */
     (void)rp_vo_fill_estimate(&vo->ekf, im, fs ? fs->utime : vo->prev_utime, vo->frame, flags,
                               vo->lm.map.n, est);
     /* the map's scale uncertainty, common to every landmark (and the estimated unit's) */
@@ -343,13 +349,17 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
 {
     static const rp_real zero[6] = {0};
     rp_pose_lin_t pl;
+    /* ignored: a zero pose is finite, the only failure */
     (void)rp_pose_lin_set(&pl, zero);
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
+    /* ignored: cannot fail: the parameters were checked at init */
     (void)rp_vo_ekf_at_origin(&vo->ekf, &vo->cfg.ekf);
     rp_vo_gc_scale_reset(vo);
     uint32_t flags = RP_EST_INITIALISING;
     for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
         const uint8_t cam = vo->cfg.cams[k];
+        /* ignored: the count is not needed here */
         (void)top_up_camera(vo, fs, cam, &pl, NULL);
         if (vo->lm.map.n_group[cam] < vo->cfg.min_tracked) {
             flags |= RP_EST_DEGRADED;
@@ -443,6 +453,7 @@ static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
         const rp_real lam = proj_var_max(Jp, 6, Ppp, 0);
         const rp_real sig = rp_sqrt(s2 + (lam > RP_C(0.0) ? lam : RP_C(0.0)));
         /* a rejected update leaves the point as it was */
+        /* ignored: a point its gate refuses stays as it was (the gate, not a fault) */
         (void)rp_struct_update(pt, &vo->rig_m, cam, &pl, vo->obs[i].uv, sig,
                                vo->cfg.ekf.gate_chi2);
     }

@@ -14,6 +14,7 @@
 static rp_gcba_state_t ba_state(const rp_vo_gc_t *vo)
 {
     rp_gcba_state_t st = RP_GCBA_IDLE;
+    /* ignored: fails only on NULL / a bad index: ours */
     (void)rp_gcba_state(&vo->ba, &st);
     return st;
 }
@@ -22,6 +23,7 @@ void rp_vo_gc_scale_reset(rp_vo_gc_t *vo)
 {
     rp_vo_gc_set_mu(vo, RP_C(1.0));
     vo->mu_var = vo->cfg.mscale_sigma * vo->cfg.mscale_sigma;
+    /* ignored: fails only on NULL / a bad index: ours */
     (void)rp_gcba_reset(&vo->ba,
                         vo->cfg.mscale_sigma > RP_C(0.0) ? vo->cfg.ba_kf : RP_VO_GC_BA_MIN_KF);
     vo->kf_since = 0;
@@ -92,6 +94,7 @@ static void correct_pose(rp_vo_gc_t *vo)
             pk[a] = p0[a] + vo->ba_last.mu * (sk[a] - s0[a]);
             pk[3 + a] = sk[3 + a];
         }
+        /* ignored: fails only on NULL / a bad index: ours */
         (void)rp_gcba_set_pose(&vo->ba, k, pk);
     }
     /* the newest keyframe, as the filter had it (po) and as solved (pk): T_c = T_pk T_po^-1 */
@@ -285,6 +288,7 @@ void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs)
     }
     uint8_t n_kf = 0;
     uint16_t n_lm;
+    /* ignored: fails only on NULL / a bad index: ours */
     (void)rp_gcba_counts(&vo->ba, &n_kf, &n_lm);
     if (++vo->kf_since < vo->cfg.ba_every || n_kf < RP_VO_GC_BA_MIN_KF) {
         return;

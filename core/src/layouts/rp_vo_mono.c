@@ -48,8 +48,10 @@ rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_m
     vo->own.cam[0].R[0] = vo->own.cam[0].R[4] = vo->own.cam[0].R[8] = RP_C(1.0);
     vo->own.cam[0].cam = rig->cam[cfg->cam].cam;
     vo->ekf = idle;
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
+    /* ignored: only NULL arguments fail */
     (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
     return RP_OK;
 }
@@ -197,6 +199,7 @@ static uint32_t gather_obs(rp_vo_mono_t *vo, const rp_frameset_t *fs, const rp_r
     rp_pose_lin_t pl;
     const int have_pl = rp_pose_lin_set(&pl, p_pred) == RP_OK;
     uint32_t n = 0;
+    /* ignored: cannot fill: the cap holds a whole frame set */
     (void)rp_lmtab_gather(&vo->lm, fs, &vo->cfg.cam, 1, 0, vo->obs, vo->obs_id,
                           RP_MAX_FEATS_PER_CAM, &n);
     for (uint32_t i = 0; i < n; ++i) {
@@ -216,6 +219,7 @@ static void fill_estimates(const rp_vo_mono_t *vo, int64_t utime, uint32_t flags
     rp_estimate_t e;
     memset(&e, 0, sizeof(e));
     /* a single camera's scale is the assumed depth's */
+    /* ignored: only NULL arguments fail */
     (void)rp_vo_fill_estimate(&vo->ekf, RP_C(1.0), utime, vo->frame, flags | RP_EST_SCALE_WEAK,
                               vo->lm.map.n, &e);
     if (own) {
@@ -267,8 +271,10 @@ static rp_status_t first_frame(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_est
                                rp_estimate_t *own)
 {
     static const rp_real zero[6] = {0};
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     const uint16_t added = add_features(vo, fs->f[vo->cfg.cam], fs->n[vo->cfg.cam], zero, NULL);
+    /* ignored: cannot fail: the parameters were checked at init */
     (void)rp_vo_ekf_at_origin(&vo->ekf, &vo->cfg.ekf);
     remember(vo, fs);
     uint32_t flags = RP_EST_INITIALISING;
@@ -366,6 +372,7 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
         return first_frame(vo, fs, est, own);
     }
     rp_real dt;
+    /* ignored: cannot fail: fs and dt given */
     (void)rp_vo_frame_dt(fs, vo->prev_utime, vo->cfg.default_dt_s, &dt);
     uint32_t flags = 0;
 
@@ -375,12 +382,15 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
         st = rp_ekf_predict(&vo->ekf, dt);
     }
     uint32_t n = gather_obs(vo, fs, vo->ekf.x);
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, NULL, n);
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_drop_unmarked(&vo->lm, RP_IDMAP_ALL_GROUPS, NULL);
 
     /* Step (5): under the threshold, backtrack one frame and add the previous frame's features
      * (still tracked now) at the previous pose. */
     if (vo->lm.map.n < vo->cfg.min_tracked) {
+        /* ignored: the count is not needed here */
         (void)add_features(vo, vo->prev, vo->n_prev, vo->prev_p, fs);
         flags |= RP_EST_REINIT;
         n = gather_obs(vo, fs, vo->ekf.x);
@@ -407,6 +417,7 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
     if (st == RP_OK) {
         flags |= RP_EST_TRACKING;
         /* step 4: each used observation updates its landmark at the new pose */
+        /* ignored: a point its gate refuses stays as it was (the gate, not a fault) */
         (void)rp_lmtab_refine(&vo->lm, &vo->own, vo->ekf.x, vo->obs, vo->obs_id, vo->used, n,
                               vo->cfg.ekf.sigma_px, vo->cfg.ekf.gate_chi2);
         for (uint32_t i = 0; i < n; ++i) {
@@ -414,11 +425,13 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
                 n_used++;
             }
         }
+        /* ignored: only NULL arguments fail */
         (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->used, n);
         if (n_gated > 0) {
             flags |= RP_EST_GATED;
         }
         /* a landmark whose observation was gated is an outlier */
+        /* ignored: only NULL arguments fail */
         (void)rp_lmtab_drop_unmarked(&vo->lm, n_gated > 0 ? RP_IDMAP_ALL_GROUPS : 0u, NULL);
     } else {
         flags |= RP_EST_LOST;

@@ -72,7 +72,9 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
         }
     }
     vo->ekf = idle;
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
+    /* ignored: only NULL arguments fail */
     (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
     (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
     return RP_OK;
@@ -192,6 +194,7 @@ static uint32_t gather_obs(rp_vo_stereo_t *vo, const rp_frameset_t *fs)
         }
     }
     uint32_t n = 0;
+    /* ignored: cannot fill: the cap holds a whole frame set */
     (void)rp_lmtab_gather(&vo->lm, fs, cams, n_cams, 0, vo->obs, vo->obs_id,
                           RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM, &n);
     return n;
@@ -200,6 +203,7 @@ static uint32_t gather_obs(rp_vo_stereo_t *vo, const rp_frameset_t *fs)
 static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uint32_t flags,
                           rp_estimate_t *est)
 {
+    /* ignored: only NULL arguments fail */
     (void)rp_vo_fill_estimate(&vo->ekf, RP_C(1.0), fs ? fs->utime : vo->prev_utime, vo->frame,
                               flags, vo->lm.map.n, est);
 }
@@ -236,12 +240,14 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
 {
     /* Step (1) at frame 0: the world is cam1's frame now, so the pose is exactly zero. */
     static const rp_real zero[6] = {0};
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     uint16_t added = 0;
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
         added = (uint16_t)(added + triangulate_pair(vo, k, fs, zero, NULL));
     }
     (void)rp_lmtab_drop_unmarked(&vo->lm, 0, NULL); /* clears the marks */
+    /* ignored: cannot fail: the parameters were checked at init */
     (void)rp_vo_ekf_at_origin(&vo->ekf, &vo->cfg.ekf);
     vo->frame = 1;
     vo->prev = *fs;
@@ -412,6 +418,7 @@ static int pair_rejected(const rp_vo_stereo_t *vo, uint32_t n)
 static rp_status_t update_towards(rp_vo_stereo_t *vo, const rp_real p[6], uint32_t n,
                                   rp_ekf_info_t *retry)
 {
+    /* ignored: only NULL arguments fail */
     (void)rp_vo_ekf_towards(&vo->ekf_pred, p, &vo->ekf);
     if (vo->cfg.one_point) {
         /* the retry too keeps to the largest consensus: a self-consistent group (a moving
@@ -544,7 +551,9 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
 
     /* Which landmarks are still tracked; lost ones are dropped. */
     uint32_t n = gather_obs(vo, fs);
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, NULL, n);
+    /* ignored: only NULL arguments fail */
     (void)rp_lmtab_drop_unmarked(&vo->lm, RP_IDMAP_ALL_GROUPS, NULL);
 
     /* Step (5): a pair under its threshold is re-initialised from the previous frame set at
@@ -552,6 +561,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     int reinit = 0;
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
         if (vo->lm.map.n_group[k] < vo->cfg.min_tracked) {
+            /* ignored: the count is not needed here */
             (void)triangulate_pair(vo, k, &vo->prev, vo->prev_p, fs);
             reinit = 1;
         }
@@ -596,15 +606,18 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
             }
         }
         quarantine(vo, n);
+        /* ignored: only NULL arguments fail */
         (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->keep, n);
         if (vo->cfg.refine_structure) {
             /* step 4: each used observation updates its landmark at the new pose */
+            /* ignored: a point its gate refuses stays as it was (the gate, not a fault) */
             (void)rp_lmtab_refine(&vo->lm, vo->rig, vo->ekf.x, vo->obs, vo->obs_id, vo->used, n,
                                   vo->cfg.ekf.sigma_px, vo->cfg.ekf.gate_chi2);
         }
         if (n_gated > 0) {
             flags |= RP_EST_GATED;
         }
+        /* ignored: only NULL arguments fail */
         (void)rp_lmtab_drop_unmarked(&vo->lm, n_gated > 0 ? RP_IDMAP_ALL_GROUPS : 0u, NULL);
     } else {
         flags |= RP_EST_LOST;

@@ -50,7 +50,9 @@ rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg)
     }
     memset(cfg, 0, sizeof(*cfg));
     cfg->layout = layout;
+    /* ignored: cannot fail: a default configuration */
     (void)rp_track_default_cfg(&cfg->track);
+    /* ignored: cannot fail: a default configuration */
     (void)rp_smatch_default_cfg(&cfg->smatch);
     cfg->stereo = rp_vo_stereo_default_cfg();
     cfg->stereo.n_pairs = layout == RP_PIPE_STEREO4 ? 2 : 1;
@@ -226,7 +228,9 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     }
     rp_tracker_t *B = &pipe->trk[tb];
     const rp_pyr_t *pa, *pb;
+    /* ignored: cannot fail: the pipeline's own tracker, checked at init */
     (void)rp_track_current_pyr(&pipe->trk[ta], &pa);
+    /* ignored: cannot fail: the pipeline's own tracker, checked at init */
     (void)rp_track_current_pyr(B, &pb);
     uint16_t n_new = 0;
     for (uint16_t i = 0; i < pipe->fs.n[sp->a]; ++i) {
@@ -239,6 +243,7 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
         return;
     }
     uint16_t nb = 0;
+    /* ignored: counted in pipe->info.match; no match adds nothing */
     (void)rp_smatch_pair(&pipe->sm, pipe->rig, sp, pa, pb, pipe->scratch_a, n_new,
                          pipe->scratch_b, RP_MAX_FEATS_PER_CAM, &nb, &info->match[k]);
     uint16_t n_adopted = 0;
@@ -259,9 +264,12 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     }
     if (n_lost > 0) {
         rp_tracker_t *A = &pipe->trk[ta];
+        /* ignored: cannot fail: the pipeline's own tracker, checked at init */
         (void)rp_track_drop_ids(A, pipe->drop_ids, n_lost, NULL);
+        /* ignored: RP_E_FULL keeps the frame set's own limit */
         (void)rp_track_features(A, pipe->fs.f[sp->a], RP_MAX_FEATS_PER_CAM, &pipe->fs.n[sp->a]);
     }
+    /* ignored: RP_E_FULL keeps the frame set's own limit */
     (void)rp_track_features(B, pipe->fs.f[sp->b], RP_MAX_FEATS_PER_CAM, &pipe->fs.n[sp->b]);
 }
 
@@ -274,6 +282,7 @@ static void track_one(rp_pipe_t *pipe, uint8_t t, const rp_image_t *img, int64_t
     rp_tracker_t *trk = &pipe->trk[t];
     rp_pipe_info_t *info = &pipe->info;
     const rp_camera_t *c = &pipe->rig->cam[cam].cam;
+    /* ignored: cannot fail: the pipeline's own tracker, checked at init */
     (void)rp_track_next_serial(trk, &pipe->born_k[t]);
     pipe->fs.n[cam] = 0;
     if (img == NULL || img->data == NULL) {
@@ -300,7 +309,9 @@ static void track_one(rp_pipe_t *pipe, uint8_t t, const rp_image_t *img, int64_t
     }
     if (pipe->trk_right[t]) {
         /* the pair's first camera is the one whose tracker precedes this one */
+        /* ignored: cannot fail: the pipeline's own tracker, checked at init */
         (void)rp_track_keep_owned(trk, pipe->trk_cam[t - 1], NULL);
+        /* ignored: RP_E_FULL keeps the frame set's own limit */
         (void)rp_track_features(trk, pipe->fs.f[cam], RP_MAX_FEATS_PER_CAM, &n);
     }
     pipe->fs.n[cam] = n;
