@@ -284,6 +284,7 @@ static rp_hal_status_t source_open(const rp_config_t *cfg, rp_hal_source_t **src
 static void source_close(rp_hal_source_t *src)
 {
     if (src != NULL) {
+        /* ignored: best effort before closing: the summary follows whatever it says */
         (void)rp_hal_stop(src);
         rp_hal_close(src);
     }
@@ -423,6 +424,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
     rp_estimate_t est;
     memset(&est, 0, sizeof est);
     uint32_t grab_errors = 0;
+    /* ignored: fits: 63 characters of channel and _FEATURES */
     (void)snprintf(g_feat_channel, sizeof g_feat_channel, "%s_FEATURES", g_cfg.image_channel);
 
     while (!g_stop && (o->frames == 0 || g_stats.n_sets < o->frames)) {
@@ -503,6 +505,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
         }
 
         rp_stats_set_t r;
+        /* ignored: only NULL arguments fail */
         (void)rp_stats_set(&g_stats, &g_set, &est, lat_ms, t_pub, &r);
 
         /* Status: every status_every sets, and at once when a camera changes state. */
@@ -598,6 +601,7 @@ int main(int argc, char **argv)
         print_header();
     }
 
+    /* ignored: only NULL arguments fail */
     (void)rp_stats_init(&g_stats, g_cfg.hal.kind, method_code(&g_cfg), g_cfg.rig.n_cams,
                         rp_hal_now_us());
     const int exit_code = run(&o, src, lcm);

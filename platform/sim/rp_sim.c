@@ -237,6 +237,7 @@ static void store_truth(rp_sim_run_t *sr, uint32_t j, const double R[9], const d
     for (int i = 0; i < 9; ++i) {
         Rr[i] = (rp_real)R[i];
     }
+    /* ignored: only non-finite input fails; R is a product of rotations of finite angles */
     (void)rp_rot_to_angles(Rr, abg);
     for (int i = 0; i < 3; ++i) {
         t[3 + i] = (double)abg[i];

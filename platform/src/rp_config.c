@@ -880,6 +880,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
                     "'%s' is not one of %s", method, names);
     }
     rp_pipe_cfg_t *pc = &cfg->pipe;
+    /* ignored: cannot fail: a layout the parser has just checked */
     (void)rp_pipe_default_cfg(layout, pc);
     for (size_t k = 0; k < N_EST_KEYS; ++k) {
         if (set_est_key(c, m, P, &est_keys[k], pc) != 0) {
@@ -1085,10 +1086,12 @@ static rp_cfg_status_t parse_doc(ctx_t *c, rp_config_t *cfg)
                                         "tracker", "lcm",    "meta",    NULL};
     const yaml_node_t *root = yaml_document_get_root_node(c->doc);
     if (root == NULL) {
+        /* ignored: it returns the status it was given: here only the message is wanted */
         (void)fail(c, RP_CFG_E_SYNTAX, NULL, "(top)", "empty file");
         return c->st;
     }
     if (root->type != YAML_MAPPING_NODE) {
+        /* ignored: it returns the status it was given: here only the message is wanted */
         (void)fail(c, RP_CFG_E_SYNTAX, root, "(top)", "expected a mapping, got %s",
                    node_kind(root));
         return c->st;

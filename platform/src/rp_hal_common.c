@@ -68,6 +68,7 @@ rp_hal_status_t rp_hal_open(rp_hal_source_t **src, const rp_hal_cfg_t *cfg)
         return RP_HAL_E_ARG;
     }
     if (cfg->n_cams < 1 || cfg->n_cams > RP_MAX_CAMS) {
+        /* ignored: it returns the status it was given: here only the message is wanted */
         (void)rp_hal_fail(g_src.err, RP_HAL_E_ARG, "n_cams %u out of 1..%d",
                           (unsigned)cfg->n_cams, RP_MAX_CAMS);
         return RP_HAL_E_ARG;

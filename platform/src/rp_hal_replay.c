@@ -130,6 +130,7 @@ static const char *line_why(int r)
     switch (r) {
     case LINE_TOO_LONG: {
         static char b[64];
+        /* ignored: a message cut at RP_HAL_ERR_MAX is still a message */
         (void)snprintf(b, sizeof b, "line longer than %d characters", LINE_MAX_CHARS - 1);
         return b;
     }
@@ -390,12 +391,15 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
     struct stat st;
     const int is_dir = stat(idx, &st) == 0 && S_ISDIR(st.st_mode);
     if (is_dir) {
+        /* ignored: a path cut short fails to open, which says so */
         (void)snprintf(s->dir, sizeof s->dir, "%s", idx);
     } else {
         const char *slash = strrchr(idx, '/');
         if (slash == NULL) {
+            /* ignored: a path cut short fails to open, which says so */
             (void)snprintf(s->dir, sizeof s->dir, ".");
         } else {
+            /* ignored: a path cut short fails to open, which says so */
             (void)snprintf(s->dir, sizeof s->dir, "%.*s", (int)(slash - idx), idx);
         }
     }
@@ -404,10 +408,13 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
         s->dir[--dl] = '\0';
     }
     if (is_dir) {
+        /* ignored: a path cut short fails to open, which says so */
         (void)snprintf(s->index, sizeof s->index, "%s/frames.csv", s->dir);
     } else { /* the file given, whatever its name (a renamed index is not silently replaced) */
+        /* ignored: a path cut short fails to open, which says so */
         (void)snprintf(s->index, sizeof s->index, "%s", idx);
     }
+    /* ignored: a path cut short fails to open, which says so */
     (void)snprintf(csv, sizeof csv, "%s", s->index);
     const char *why = NULL;
     s->frames = open_regular(csv, &why);
@@ -459,6 +466,7 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
         }
         s->col[i] = (uint8_t)c;
     }
+    /* ignored: a path cut short fails to open, which says so */
     (void)snprintf(csv, sizeof csv, "%s/truth.csv", s->dir);
     struct stat tst;
     if (stat(csv, &tst) == 0 || errno != ENOENT) { /* truth.csv is optional */
@@ -589,6 +597,7 @@ static rp_hal_status_t read_row(replay_src_t *s)
     }
     if (n_bad > 1) {
         const size_t len = strlen(s->ready_msg);
+        /* ignored: a message cut at RP_HAL_ERR_MAX is still a message */
         (void)snprintf(s->ready_msg + len, RP_HAL_ERR_MAX - len, " (and %u more cameras)",
                        n_bad - 1);
     }

@@ -140,6 +140,7 @@ rp_hal_status_t rp_hal_sim_grab(rp_hal_sim_t *sim, rp_hal_set_t *set)
         }
         t = due;
     }
+    /* ignored: returns the feature count; j < n_frames was checked above */
     (void)rp_sim_frame(&sim->run, j, &sim->fs);
 
     memset(set, 0, sizeof *set);

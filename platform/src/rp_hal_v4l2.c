@@ -110,6 +110,7 @@ rp_hal_status_t rp_hal_jpeg_to_grey(const uint8_t *jpg, size_t n, uint16_t w, ui
     jpeg_start_decompress(&cinfo);
     while (cinfo.output_scanline < cinfo.output_height) {
         JSAMPROW row = dst + (size_t)cinfo.output_scanline * w;
+        /* ignored: the rows read: 1, a memory source never suspends */
         (void)jpeg_read_scanlines(&cinfo, &row, 1);
     }
     jpeg_finish_decompress(&cinfo);
@@ -277,10 +278,12 @@ static void cam_close(v4l2_cam_t *c)
 {
     if (c->fd >= 0 && c->streaming) {
         enum v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        /* ignored: best effort while closing: nothing left to do on failure */
         (void)xioctl(c->fd, VIDIOC_STREAMOFF, &type);
     }
     for (uint32_t i = 0; i < c->nbuf; i++) {
         if (c->buf[i] != NULL && c->buf[i] != MAP_FAILED) {
+            /* ignored: best effort while closing: nothing left to do on failure */
             (void)munmap(c->buf[i], c->len[i]);
         }
         c->buf[i] = NULL;
@@ -290,6 +293,7 @@ static void cam_close(v4l2_cam_t *c)
     c->n_held = 0;
     c->out_idx = -1;
     if (c->fd >= 0) {
+        /* ignored: best effort while closing: nothing left to do on failure */
         (void)close(c->fd);
     }
     c->fd = -1;
@@ -544,6 +548,7 @@ static int cam_read(v4l2_cam_t *c)
 
 static void cam_lost(v4l2_src_t *s, v4l2_cam_t *c, const char *why, int64_t now)
 {
+    /* ignored: it returns the status it was given: here only the message is wanted */
     (void)rp_hal_fail(s->err, RP_HAL_OK, "camera %u: %s: %s; reopening every %u ms",
                       (unsigned)(c - s->cam), c->cfg->device, why, (unsigned)s->cfg.retry_ms);
     cam_close(c);
@@ -628,6 +633,7 @@ static rp_hal_status_t v4l2_start(void *ctx)
             for (uint8_t j = 0; j <= i; j++) {
                 if (s->cam[j].streaming) {
                     enum v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+                    /* ignored: best effort while closing: nothing left to do on failure */
                     (void)xioctl(s->cam[j].fd, VIDIOC_STREAMOFF, &type);
                     s->cam[j].streaming = 0;
                 }
@@ -684,6 +690,7 @@ static void fill_set(v4l2_src_t *s, rp_hal_set_t *set, const int8_t pick[], int6
             f->flags = c->rejoining ? RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE : RP_HAL_CAM_MISSING;
             continue;
         }
+        /* ignored: a buffer the driver refuses back fails its next dequeue, which says so */
         (void)cam_drop_held(c, (uint8_t)pick[i]);
         const uint32_t idx = c->held[0].idx;
         f->utime = c->held[0].t_us;
@@ -779,6 +786,7 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
                 }
             }
             /* What there is: the newest frame held and those within the tolerance of it. */
+            /* ignored: the count; pick[] says which cameras came (-1: none) */
             (void)rp_hal_group(t, count, n, RP_HAL_V4L2_HOLD, need, s->cfg.sync_tol_us, pick,
                                &anchor);
             fill_set(s, set, pick, anchor);
@@ -822,9 +830,11 @@ rp_hal_status_t rp_hal_v4l2_describe(uint8_t cam, char *buf, size_t cap)
     char fs[5];
     fourcc_str(c->fourcc, fs);
     if (c->gone) {
+        /* ignored: a message cut at RP_HAL_ERR_MAX is still a message */
         (void)snprintf(buf, cap, "%s: gone, retried every %u ms", c->cfg->device,
                        (unsigned)s->cfg.retry_ms);
     } else {
+        /* ignored: a message cut at RP_HAL_ERR_MAX is still a message */
         (void)snprintf(buf, cap, "%s: %s %ux%u, %u bytes/line, %u mmap buffers", c->cfg->device,
                        fs, (unsigned)c->w, (unsigned)c->h, (unsigned)c->bpl, (unsigned)c->nbuf);
     }
