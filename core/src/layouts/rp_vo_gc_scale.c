@@ -76,35 +76,54 @@ static void change_mu(rp_vo_gc_t *vo, rp_real mu)
  * applied to every landmark and to the filter's pose now (the adjustment was spread over the
  * frames since that keyframe), so that the map keeps its place relative to the rig; then the
  * adjusted landmarks take the solution's positions. */
-static void correct_pose(rp_vo_gc_t *vo)
+static rp_status_t correct_pose(rp_vo_gc_t *vo)
 {
+    /* Everything is computed before anything changes: a failure leaves the window, the map and
+     * the filter as they were (never half corrected). */
     uint8_t nk;
     uint16_t n_lm;
-    rp_real p0[6], s0[6], pk[6], sk[6], po[6];
-    if (rp_gcba_counts(&vo->ba, &nk, &n_lm) != RP_OK || nk < 1 ||
+    rp_real p0[6], s0[6], po[6], sk[6];
+    rp_real pk[RP_GCBA_MAX_KF][6];
+    if (rp_gcba_counts(&vo->ba, &nk, &n_lm) != RP_OK || nk < 2 || nk > RP_GCBA_MAX_KF ||
         rp_gcba_kf_pose(&vo->ba, 0, p0) != RP_OK || rp_gcba_solved_pose(&vo->ba, 0, s0) != RP_OK ||
         rp_gcba_kf_pose(&vo->ba, (uint8_t)(nk - 1), po) != RP_OK) {
-        return;
+        return RP_E_ARG; /* nothing to correct against (fewer than two keyframes) */
     }
     for (uint8_t k = 1; k < nk; ++k) {
         if (rp_gcba_solved_pose(&vo->ba, k, sk) != RP_OK) {
-            return;
+            return RP_E_ARG;
         }
         for (int a = 0; a < 3; ++a) {
-            pk[a] = p0[a] + vo->ba_last.mu * (sk[a] - s0[a]);
-            pk[3 + a] = sk[3 + a];
+            pk[k][a] = p0[a] + vo->ba_last.mu * (sk[a] - s0[a]);
+            pk[k][3 + a] = sk[3 + a];
         }
-        /* ignored: fails only on NULL / a bad index: ours */
-        (void)rp_gcba_set_pose(&vo->ba, k, pk);
     }
-    /* the newest keyframe, as the filter had it (po) and as solved (pk): T_c = T_pk T_po^-1 */
+    /* the newest keyframe, as the filter had it (po) and as solved (pn): T_c = T_pn T_po^-1 */
+    const rp_real *pn = pk[nk - 1];
     rp_real Ro[9], Rn[9], Rc[9], tc[3], t[3];
     rp_rot_from_angles(&po[3], Ro);
-    rp_rot_from_angles(&pk[3], Rn);
+    rp_rot_from_angles(&pn[3], Rn);
     rp_rot_mul_a_bt(Rn, Ro, Rc);
     rp_rot_apply(Rc, po, t);
     for (int a = 0; a < 3; ++a) {
-        tc[a] = pk[a] - t[a];
+        tc[a] = pn[a] - t[a];
+    }
+    /* the filter's pose now (a frame or more after the keyframe) follows the same T_c */
+    rp_real v[3], w[3], tx[3], Rj[9], Rnew[9], ang[3];
+    rp_rot_from_angles(&vo->ekf.x[3], Rj);
+    rp_rot_mul(Rc, Rj, Rnew);
+    if (rp_rot_to_angles(Rnew, ang) != RP_OK || !rp_all_finite(tc, 3)) {
+        return RP_E_NAN;
+    }
+    rp_rot_apply(Rc, vo->ekf.x, tx);
+    rp_rot_apply(Rc, &vo->ekf.x[6], v);
+    /* the world-frame angular rate turns with the world: (Rc R)' = [Rc omega]x Rc R */
+    rp_rot_apply(Rc, &vo->ekf.x[9], w);
+
+    /* ---- commit ---- */
+    for (uint8_t k = 1; k < nk; ++k) {
+        /* ignored: fails only on NULL / a bad index: ours (k < nk, checked above) */
+        (void)rp_gcba_set_pose(&vo->ba, k, pk[k]);
     }
     for (uint16_t slot = 0; slot < RP_IDMAP_MAX_SLOTS; ++slot) {
         if (rp_lmtab_slot(&vo->lm, slot, NULL, NULL, NULL) != RP_OK) {
@@ -129,7 +148,7 @@ static void correct_pose(rp_vo_gc_t *vo)
         rp_real X[3], C[6];
         if (rp_gcba_landmark(&vo->ba, i, &id, &cam, X, C) != RP_OK ||
             rp_lmtab_find(&vo->lm, id, &slot) != RP_OK || vo->lm.map.slot_group[slot] != cam) {
-            continue;
+            continue; /* a landmark the window holds and the map no longer does */
         }
         rp_point3_t *pt = &vo->lm.pt[slot];
         const rp_real m2 = vo->ba_last.mu * vo->ba_last.mu;
@@ -140,22 +159,13 @@ static void correct_pose(rp_vo_gc_t *vo)
             pt->C[a] = m2 * C[a];
         }
     }
-    /* the filter's pose now (a frame or more after the keyframe) follows the same T_c */
-    rp_real v[3], Rj[9], Rnew[9], ang[3];
-    rp_rot_from_angles(&vo->ekf.x[3], Rj);
-    rp_rot_mul(Rc, Rj, Rnew);
-    if (rp_rot_to_angles(Rnew, ang) != RP_OK) {
-        return;
-    }
-    rp_rot_apply(Rc, vo->ekf.x, t);
-    rp_rot_apply(Rc, &vo->ekf.x[6], v);
-    /* the world-frame angular rate turns with the world: (Rc R)' = [Rc omega]x Rc R */
-    rp_rot_apply(Rc, &vo->ekf.x[9], &vo->ekf.x[9]);
     for (int a = 0; a < 3; ++a) {
-        vo->ekf.x[a] = t[a] + tc[a];
+        vo->ekf.x[a] = tx[a] + tc[a];
         vo->ekf.x[3 + a] = ang[a];
         vo->ekf.x[6 + a] = v[a];
+        vo->ekf.x[9 + a] = w[a];
     }
+    return RP_OK;
 }
 
 /* Reorder h[0..n) (and idx with it) so that its want lowest values come first (quickselect). */
@@ -224,7 +234,9 @@ static void take_adjustment(rp_vo_gc_t *vo)
     vo->mu_var = (RP_C(1.0) - k) * vo->mu_var;
     change_mu(vo, mu);
     vo->n_ba++;
-    correct_pose(vo);
+    if (correct_pose(vo) != RP_OK) {
+        vo->n_ba_rejected++; /* the scale was fused; the window's poses could not be applied */
+    }
 }
 
 /* Step 6 (rp_vo_gc.h): keep this frame as a keyframe every ba_stride frames and, every ba_every
