@@ -4,7 +4,8 @@
 # missing ones, so a second run costs a few dpkg queries.
 #
 # usage: scripts/install-deps.sh [host|cross|py|all]   (default: all)
-#   host   Debian packages for the host build, tests, tools and the V4L2 VM test
+#   host   Debian packages for the host build, tests, tools, the V4L2 VM test and the fuzz
+#          targets (clang with its libFuzzer runtime, libclang-rt-14-dev: Debian 12's clang 14)
 #   cross  the aarch64 toolchain, qemu-user and arm64 libraries (Debian multiarch)
 #   py     host + a virtual environment .venv/ (Debian's python3) with the PyPI packages of
 #          the Python-side clients and tests (lcm bindings, evo)
@@ -16,7 +17,8 @@ host_pkgs=(build-essential g++ make pkg-config
            libeigen3-dev libcmocka-dev liblcm-dev liblcm-bin
            libopencv-dev libopengv-dev libyaml-dev valgrind
            python3 python3-venv opencv-doc
-           qemu-system-x86 busybox-static xz-utils cpio libpng-dev libjpeg-dev)
+           qemu-system-x86 busybox-static xz-utils cpio libpng-dev libjpeg-dev
+           clang libclang-rt-14-dev)
 cross_pkgs=(gcc-aarch64-linux-gnu g++-aarch64-linux-gnu qemu-user libcmocka-dev:arm64)
 
 SUDO=""

@@ -24,3 +24,4 @@ $(CMN)/test_lcmlog: host_tools/common/test_lcmlog.c host_tools/common/rp_lcmlog.
 
 HOST_EXTRA_TESTS += $(CMN)/test_lcmlog host_tools/common/test_lcmlog_cli.sh
 test: $(CMN)/test_lcmlog $(REL)/rigpose-eval $(REL)/rigpose-log
+export RP_LCMLOG_WORK = $(CMN)/work
