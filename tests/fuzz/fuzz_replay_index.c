@@ -7,7 +7,9 @@
  * into a private folder that also holds two valid images the rows may name, a.pgm (8x6 PGM) and
  * b.png (8x6 PNG). Inputs with a '/' are skipped: a path out of the folder could name a device
  * or a FIFO of this machine. Two configurations per input: one camera on the first image column,
- * and two cameras, the second on the column named cam1. Not paced (realtime 0).
+ * and two cameras, the second on the column named cam1. Not paced (realtime 0), unless the input
+ * starts with "#rt": then both are paced at the rows' times with timeout_ms 1 (a grab waits at
+ * most 1 ms), which reaches the pacing arithmetic.
  */
 #include <stddef.h>
 #include <stdint.h>
@@ -48,12 +50,14 @@ static void setup_images(void)
     done = 1;
 }
 
-static void run(uint8_t n_cams, const char *dev1)
+static void run(uint8_t n_cams, const char *dev1, int paced)
 {
     static rp_hal_cfg_t cfg;
     memset(&cfg, 0, sizeof cfg);
     cfg.kind = RP_HAL_SRC_REPLAY;
     cfg.n_cams = n_cams;
+    cfg.realtime = (uint8_t)paced;
+    cfg.timeout_ms = paced ? 1 : 0;
     if (n_cams > 1) {
         snprintf(cfg.cam[1].device, sizeof cfg.cam[1].device, "%s", dev1);
     }
@@ -103,7 +107,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     } else {
         unlink(p);
     }
-    run(1, "");
-    run(2, "cam1");
+    const int paced = size >= 3 && memcmp(data, "#rt", 3) == 0;
+    run(1, "", paced);
+    run(2, "cam1", paced);
     return 0;
 }

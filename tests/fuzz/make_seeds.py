@@ -62,6 +62,8 @@ def replay_index():
         "utime_us,cam0,cam1\n1000,a.pgm,missing.png\n999,a.pgm,b.png\nx,a.pgm,b.png\n"
         "3000,a.pgm\n4000,.,..\n5000,a.pgm,b.png,c\n9223372036854775807,a.pgm,b.png\n")
     put("replay_index", "crlf_named", "utime_us,cam1,cam0\r\n10,b.png,a.pgm\r\n20,a.pgm,b.png\r\n")
+    put("replay_index", "paced", "#rt paced at 1 ms\nutime_us,cam0,cam1\n1000,a.pgm,b.png\n"
+        "1500,b.png,a.pgm\n2000,a.pgm,a.pgm\n")
 
 
 def image():
