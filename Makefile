@@ -200,7 +200,8 @@ test-arm: deps-cross $(ARM_TEST_BINS)
 
 # ---- parts in their own makefiles -------------------------------------------------------------
 # Each folder that builds something beyond the core keeps a *.mk here (host_tools/<tool>/*.mk,
-# host_tools/research/<tool>/*.mk, platform/*.mk, lcm_types/*.mk, daemon/*.mk, tests/*/*.mk).
+# host_tools/research/<tool>/*.mk, platform/*.mk, lcm_types/*.mk, daemon/*.mk, tests/*/*.mk,
+# docs/*.mk).
 # A part may
 #   - add what users run to EXTRA_TOOLS (built by a plain `make`),
 #   - add research and benchmark programs to RESEARCH_TOOLS (built by `make research`, and by
@@ -216,7 +217,7 @@ RESEARCH_TOOLS :=
 HOST_EXTRA_TESTS :=
 ARM_EXTRA_TESTS :=
 BENCH_PARTS :=
--include $(sort $(wildcard host_tools/*/*.mk host_tools/research/*/*.mk platform/*.mk \
+-include $(sort $(wildcard host_tools/*/*.mk host_tools/research/*/*.mk platform/*.mk docs/*.mk \
                            lcm_types/*.mk daemon/*.mk tests/*/*.mk))
 
 tools: $(EXTRA_TOOLS)

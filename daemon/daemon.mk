@@ -94,12 +94,26 @@ $(DMN)/run_test_lcm: daemon/tests/test_lcm.sh daemon/tests/lcm_sub.py
 	printf '#!/bin/sh\nexec %s/daemon/tests/test_lcm.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
 	chmod +x $@
 
+# The blank-replay test: the release daemon on a rendered replay gone blank (file:// log only).
+$(DMN)/run_test_blank: daemon/tests/test_blank.sh
+	@mkdir -p $(dir $@)
+	printf '#!/bin/sh\nexec %s/daemon/tests/test_blank.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
+	chmod +x $@
+
+# Every failure class of the release daemon (exit codes, messages naming file / camera), on
+# replay folders it writes; LCM on memq:// only, so it runs in parallel with the others.
+$(DMN)/run_test_failures: daemon/tests/test_failures.sh
+	@mkdir -p $(dir $@)
+	printf '#!/bin/sh\nexec %s/daemon/tests/test_failures.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
+	chmod +x $@
+
 DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est \
                                      $(DMN)/$(v)/test_args $(DMN)/$(v)/test_publish \
                                      $(DMN)/$(v)/test_stats)
-HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm
+HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm $(DMN)/run_test_blank $(DMN)/run_test_failures
 SERIAL_TESTS += $(DMN)/run_test_lcm
-test: $(DMN_TESTS) $(DMN)/run_test_lcm $(REL)/rigpose $(DMN_LCM)/stamp
+test: $(DMN_TESTS) $(DMN)/run_test_lcm $(DMN)/run_test_blank $(DMN)/run_test_failures \
+      $(REL)/rigpose $(REL)/rigpose-render $(DMN_LCM)/stamp
 
 # ---- benchmark -----------------------------------------------------------------------------------
 # 300 simulated frame sets as fast as the daemon takes them, published on udpm (ttl=0: this host).

@@ -22,9 +22,16 @@
  *   1  usage error (bad command line)
  *   2  invalid configuration file (the message names file, line and key)
  *   3  LCM could not be set up (bad URL, no network for udpm)
- *   4  the camera source could not be opened or started
+ *   4  the camera source could not be opened or started (the HAL's message: device, file)
  *   5  the estimator refused the configuration (rig or method)
- *   6  the camera source failed for good while running
+ *   6  the camera source failed for good while running (the last failure's message)
+ *
+ * Every failure is said once, on stderr, in the HAL's words (rp_hal_errmsg: file and line,
+ * camera, device, errno): a failed open or start; each failed grab and each set delivered
+ * with cameras missing for a reason (a replay image that could not be read, a v4l2 camera
+ * lost), rate-limited (SAY_BURST lines, then one per SAY_EVERY_US, with the count of lines
+ * not shown); and on stdout one line per change of a camera's state and of the estimator's
+ * step status or LOST flag (rate-limited alike).
  *
  * No heap in the per-frame path: every buffer is static or on the stack.
  */
@@ -55,6 +62,11 @@ enum {
 /* Grab errors in a row (not timeouts) after which the source counts as failed for good. */
 #define MAX_GRAB_ERRORS 50
 
+/* The rate limit of repeated messages (source failures, camera state changes): SAY_BURST
+ * lines at once, then one more per SAY_EVERY_US. */
+#define SAY_BURST 10
+#define SAY_EVERY_US 5000000
+
 /* ---- static state (the daemon's memory) ------------------------------------------------------ */
 
 static volatile sig_atomic_t g_stop;
@@ -62,6 +74,23 @@ static rp_config_t g_cfg;
 static rp_est_t g_est;      /* the image pipeline: images, or features from the sim source */
 static rp_hal_set_t g_set;
 static rp_stats_t g_stats;
+/* The features' channel: the image channel's name + "_FEATURES" (lcm_types/rigpose_features_t). */
+static char g_feat_channel[RP_CFG_CHANNEL_MAX + 16];
+
+/* A token bucket: credit_us of waiting earned, at most SAY_BURST lines' worth. */
+typedef struct {
+    int64_t credit_us, t_us;
+    uint32_t not_shown; /* lines held back since the last one shown */
+    uint8_t started;
+} say_limit_t;
+
+static say_limit_t g_say_src;         /* the source's failure messages */
+static say_limit_t g_say_cam;         /* camera state changes */
+static say_limit_t g_say_est;         /* estimator changes */
+static rp_status_t g_said_est_st;     /* the estimator step's status as last printed */
+static uint8_t g_said_lost;           /* LOST as last printed */
+static int8_t g_said_state[RP_MAX_CAMS]; /* each camera's state as last printed (0: ok) */
+static uint32_t g_n_grab_failed, g_n_timeouts, g_n_degraded; /* for the closing line */
 
 static void on_signal(int sig)
 {
@@ -73,6 +102,98 @@ static void on_signal(int sig)
 static const char *method_name(const rp_config_t *cfg) { return rp_pipe_layout_name(cfg->pipe.layout); }
 static int8_t method_code(const rp_config_t *cfg) { return (int8_t)cfg->pipe.layout; }
 
+/* ---- saying what happened ----------------------------------------------------------------------- */
+
+/* 1 if a line may go out now; else it is counted in l->not_shown. */
+static int say_ok(say_limit_t *l, int64_t now_us)
+{
+    const int64_t full = (int64_t)SAY_BURST * SAY_EVERY_US;
+    if (!l->started) {
+        l->started = 1;
+        l->credit_us = full;
+    } else if (now_us > l->t_us) {
+        const int64_t earned = now_us - l->t_us;
+        l->credit_us = earned >= full - l->credit_us ? full : l->credit_us + earned;
+    }
+    l->t_us = now_us;
+    if (l->credit_us >= SAY_EVERY_US) {
+        l->credit_us -= SAY_EVERY_US;
+        return 1;
+    }
+    l->not_shown++;
+    return 0;
+}
+
+/* Appends how many lines of l were held back since its last line shown, if any. */
+static void say_not_shown(FILE *f, say_limit_t *l)
+{
+    if (l->not_shown > 0) {
+        fprintf(f, " (%u similar lines not shown before this one)", l->not_shown);
+        l->not_shown = 0;
+    }
+}
+
+/* The source's message after grab status hst of frame set seq (rate-limited); msg the HAL's
+ * words. */
+static void say_source(int32_t seq, rp_hal_status_t hst, const char *msg)
+{
+    if (!say_ok(&g_say_src, rp_hal_now_us())) {
+        return;
+    }
+    if (hst == RP_HAL_OK) {
+        fprintf(stderr, "rigpose: set %d: camera source: cameras missing: %s", seq, msg);
+    } else {
+        fprintf(stderr, "rigpose: set %d: camera source: %s: %s", seq, rp_hal_status_str(hst),
+                msg[0] != '\0' ? msg : "(no message)");
+    }
+    say_not_shown(stderr, &g_say_src);
+    fputc('\n', stderr);
+}
+
+static const char *cam_state_str(int state); /* below, with the printing */
+
+/* One line per camera whose state differs from the one last printed for it (rate-limited; a
+ * change held back is said with the next line that goes out). */
+static void say_cam_changes(const rp_hal_set_t *set, int32_t seq)
+{
+    for (uint8_t k = 0; k < g_cfg.rig.n_cams && k < set->n_cams; ++k) {
+        const int8_t st = (int8_t)(set->cam[k].flags &
+                                   (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE | RP_HAL_CAM_DROPPED));
+        if (st == g_said_state[k] || !say_ok(&g_say_cam, rp_hal_now_us())) {
+            continue;
+        }
+        g_said_state[k] = st;
+        printf("rigpose: set %d: camera %d (%s): %s (reported on the status channel)", seq, k,
+               g_cfg.cam_name[k], cam_state_str(st));
+        say_not_shown(stdout, &g_say_cam);
+        putchar('\n');
+    }
+}
+
+/* One line when the estimator's step status or its LOST flag changes (rate-limited). */
+static void say_estimator_changes(int32_t seq, rp_status_t st, uint32_t flags)
+{
+    const uint8_t lost = (flags & RP_EST_LOST) != 0;
+    if (st != g_said_est_st && say_ok(&g_say_est, rp_hal_now_us())) {
+        if (st != RP_OK) {
+            printf("rigpose: set %d: estimator: step failed: %s", seq, rp_status_str(st));
+        } else {
+            printf("rigpose: set %d: estimator: steps ok again (was: %s)", seq,
+                   rp_status_str(g_said_est_st));
+        }
+        g_said_est_st = st;
+        say_not_shown(stdout, &g_say_est);
+        putchar('\n');
+    }
+    if (lost != g_said_lost && say_ok(&g_say_est, rp_hal_now_us())) {
+        printf("rigpose: set %d: estimator: %s", seq,
+               lost ? "LOST (the pose is not from the images; pose_t.flags)" : "tracking again");
+        g_said_lost = lost;
+        say_not_shown(stdout, &g_say_est);
+        putchar('\n');
+    }
+}
+
 /* ---- the camera source: every kind through the HAL ------------------------------------------- */
 
 /* Open and start cfg's source; the sim's options (noise, a vanishing camera) from cfg->sim.
@@ -81,6 +202,7 @@ static rp_hal_status_t source_open(const rp_config_t *cfg, rp_hal_source_t **src
 {
     static rp_hal_sim_opts_t so; /* read by rp_hal_open only */
     rp_hal_cfg_t hc = cfg->hal;
+    hc.partial_sets = 1; /* replay: an unreadable image costs its camera only, not the set */
     if (hc.kind == RP_HAL_SRC_SIM) {
         so = rp_hal_sim_default_opts();
         so.noise_px = cfg->sim.noise_px;
@@ -150,7 +272,7 @@ static const char *cam_state_str(int state)
 static void flag_names(uint32_t f, char *out, size_t cap)
 {
     static const char *const names[] = {"INIT", "TRACK", "REINIT", "DEGRADED",
-                                        "LOST", "GATED", "COVRESET", "SCALEWEAK"};
+                                        "LOST", "GATED", "COVRESET", "SCALEWEAK", "HELD"};
     out[0] = '\0';
     size_t used = 0;
     for (unsigned b = 0; b < sizeof names / sizeof names[0]; ++b) {
@@ -242,6 +364,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
     rp_estimate_t est;
     memset(&est, 0, sizeof est);
     uint32_t grab_errors = 0;
+    (void)snprintf(g_feat_channel, sizeof g_feat_channel, "%s_FEATURES", g_cfg.image_channel);
 
     while (!g_stop && (o->frames == 0 || g_stats.n_sets < o->frames)) {
         const int32_t seq = (int32_t)g_stats.n_sets;
@@ -252,10 +375,17 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
         }
         const int64_t t_grab = rp_hal_now_us();
         if (hst != RP_HAL_OK) {
+            g_n_grab_failed++;
+            g_n_timeouts += hst == RP_HAL_E_TIMEOUT;
             if (hst != RP_HAL_E_TIMEOUT && ++grab_errors > MAX_GRAB_ERRORS) {
-                fprintf(stderr, "rigpose: camera source failed: %s: %s\n", rp_hal_status_str(hst),
-                        rp_hal_errmsg(src));
+                fprintf(stderr, "rigpose: %s: camera source failed for good (%d failing grabs in "
+                        "a row), the last: %s: %s\n", g_cfg.path, MAX_GRAB_ERRORS + 1,
+                        rp_hal_status_str(hst), rp_hal_errmsg(src));
                 return EXIT_SOURCE_FAILED;
+            }
+            say_source(seq, hst, rp_hal_errmsg(src));
+            if (hst == RP_HAL_E_TIMEOUT) { /* the set tells which cameras came */
+                say_cam_changes(&g_set, seq);
             }
             /* Tell listeners which cameras are missing; keep going (devices are retried). */
             rp_stats_grab_failed(&g_stats, &g_set);
@@ -265,9 +395,15 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
             continue;
         }
         grab_errors = 0;
+        if (rp_hal_errmsg(src)[0] != '\0') { /* a set with cameras missing, and why */
+            g_n_degraded++;
+            say_source(seq, hst, rp_hal_errmsg(src));
+        }
+        say_cam_changes(&g_set, seq);
 
         const rp_frameset_t *fs = NULL;
         const rp_status_t st = estimator_step(&g_set, &est, &fs);
+        say_estimator_changes(seq, st, est.flags);
 
         rigpose_pose_t pm;
         rp_pub_fill_pose(&pm, &g_set, &est, st, seq, g_cfg.rig.n_cams, method_code(&g_cfg));
@@ -293,6 +429,12 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
                         bad_cam >= 0 ? g_cfg.cam_name[bad_cam] : "?", g_cfg.image_channel,
                         rp_pub_status_str(is));
             }
+            const rp_pub_status_t fst = fs == NULL ? RP_PUB_OK
+                : rp_pub_set_features(lcm, g_feat_channel, fs, g_cfg.rig.n_cams, seq, &bad_cam);
+            if (fst != RP_PUB_OK) {
+                fprintf(stderr, "rigpose: LCM features of camera %d on %s: %s\n", bad_cam,
+                        g_feat_channel, rp_pub_status_str(fst));
+            }
         }
         const float proc_ms = (float)((double)(t_pub - t_grab) * 1e-3);
 
@@ -304,14 +446,6 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
             rigpose_status_t sm;
             rp_stats_fill_status(&g_stats, &sm, &g_set, hst, fs, &est, lat_ms, proc_ms, t_pub);
             publish_status(lcm, &sm);
-            if (r.changed && seq > 0) {
-                for (uint8_t k = 0; k < g_cfg.rig.n_cams; ++k) {
-                    if (g_stats.cam_state[k] != g_stats.prev_state[k]) {
-                        printf("rigpose: camera %d (%s): %s (reported on the status channel)\n",
-                               k, g_cfg.cam_name[k], cam_state_str(g_stats.cam_state[k]));
-                    }
-                }
-            }
         }
         if (!o->quiet && (uint32_t)seq % o->print_every == 0) {
             print_pose(seq, &est, lat_ms, &r);
@@ -387,6 +521,15 @@ int main(int argc, char **argv)
 
     source_close(src);
     lcm_destroy(lcm);
+    if (g_n_grab_failed > 0 || g_n_degraded > 0) {
+        fprintf(stderr, "rigpose: camera source: %u failed grabs (%u of them timeouts), %u sets "
+                "with cameras missing for a reason", g_n_grab_failed, g_n_timeouts, g_n_degraded);
+        if (g_say_src.not_shown > 0) {
+            fprintf(stderr, "; the last %u of these messages not shown (rate limit)",
+                    g_say_src.not_shown);
+        }
+        fputc('\n', stderr);
+    }
     (void)print_summary(&g_stats, g_cfg.pose_channel, o.stats_json);
     return exit_code;
 }

@@ -20,7 +20,7 @@ void rp_args_usage(FILE *f)
             "  --fast                sim / replay: as fast as possible (source.realtime: false)\n"
             "  --sim-drop CAM:FRAME  sim: camera CAM vanishes from frame set FRAME on\n"
             "  --print-every K       print every K-th pose (default 1)\n"
-            "  --quiet               print no poses, only the summary\n"
+            "  --quiet               print no poses: only events (failures, changes) and the summary\n"
             "  --image-channel NAME  also publish every camera image (rigpose.image_t) there\n"
             "  --stats-json FILE     write daemon_latency_ms_p50/_p99 and daemon_fps to FILE\n"
             "exit codes: 0 done, 1 usage, 2 bad configuration, 3 LCM, 4 source open/start,\n"

@@ -22,7 +22,8 @@ RP_STATIC_ASSERT(RIGPOSE_POSE_T_METHOD_STEREO4 == RP_PIPE_STEREO4 &&
                      RIGPOSE_POSE_T_METHOD_RC == RP_PIPE_RC && RP_PIPE_LAYOUT_COUNT_ == 8,
                  "pose_t.METHOD_* are rp_pipe_layout_t, all eight");
 RP_STATIC_ASSERT(RIGPOSE_POSE_T_FLAG_LOST == RP_EST_LOST &&
-                     RIGPOSE_POSE_T_FLAG_SCALE_WEAK == RP_EST_SCALE_WEAK,
+                     RIGPOSE_POSE_T_FLAG_SCALE_WEAK == RP_EST_SCALE_WEAK &&
+                     RIGPOSE_POSE_T_FLAG_HELD == RP_EST_HELD,
                  "pose_t.FLAG_* are RP_EST_*");
 /* lcm-gen's sizes are int. */
 RP_STATIC_ASSERT(RP_PUB_IMAGE_BYTES < 0x7fffffff, "image_t fits an int length");
@@ -30,6 +31,8 @@ RP_STATIC_ASSERT(RP_PUB_IMAGE_BYTES < 0x7fffffff, "image_t fits an int length");
 static uint8_t g_pose_buf[RP_PUB_POSE_BYTES];
 static uint8_t g_status_buf[RP_PUB_STATUS_BYTES];
 static uint8_t g_image_buf[RP_PUB_IMAGE_BYTES];
+static uint8_t g_feats_buf[RP_PUB_FEATS_BYTES];
+static rigpose_features_t g_feats; /* 6 KB: static, not on the daemon's stack */
 static uint8_t g_pack_buf[RP_HAL_MAX_W * RP_HAL_MAX_H]; /* an image with padded rows, packed */
 
 const char *rp_pub_status_str(rp_pub_status_t s)
@@ -172,6 +175,47 @@ rp_pub_status_t rp_pub_set_images(lcm_t *lcm, const char *channel, const rp_hal_
             m.size = (int32_t)n;
             m.data = (uint8_t *)(uintptr_t)packed;
             st = rp_pub_image(lcm, channel, &m);
+        }
+        if (st != RP_PUB_OK && first == RP_PUB_OK) {
+            first = st;
+            if (bad_cam != NULL) {
+                *bad_cam = (int)k;
+            }
+        }
+    }
+    return first;
+}
+
+rp_pub_status_t rp_pub_set_features(lcm_t *lcm, const char *channel, const rp_frameset_t *fs,
+                                    uint8_t n_cams, int32_t seq, int *bad_cam)
+{
+    if (bad_cam != NULL) {
+        *bad_cam = -1;
+    }
+    if (lcm == NULL || channel == NULL || channel[0] == '\0' || fs == NULL) {
+        return RP_PUB_E_ARG;
+    }
+    rp_pub_status_t first = RP_PUB_OK;
+    for (uint8_t k = 0; k < n_cams && k < RP_MAX_CAMS; ++k) {
+        rigpose_features_t *m = &g_feats;
+        const uint16_t n = fs->n[k] < RP_PUB_FEATS_MAX ? fs->n[k] : (uint16_t)RP_PUB_FEATS_MAX;
+        m->utime = fs->utime;
+        m->seq = seq;
+        m->cam = (int8_t)k;
+        m->n = (int16_t)n;
+        for (uint16_t i = 0; i < RP_PUB_FEATS_MAX; ++i) {
+            const int used = i < n;
+            m->id[i] = used ? (int32_t)fs->f[k][i].id : 0;
+            m->u[i] = used ? (float)fs->f[k][i].uv[0] : 0.0f;
+            m->v[i] = used ? (float)fs->f[k][i].uv[1] : 0.0f;
+        }
+        rp_pub_status_t st = RP_PUB_OK;
+        const int bytes = rigpose_features_t_encoded_size(m);
+        if (bytes < 0 || (size_t)bytes > sizeof g_feats_buf) {
+            st = RP_PUB_E_SIZE;
+        } else {
+            st = send(lcm, channel, g_feats_buf, bytes,
+                      rigpose_features_t_encode(g_feats_buf, 0, (int)sizeof g_feats_buf, m));
         }
         if (st != RP_PUB_OK && first == RP_PUB_OK) {
             first = st;

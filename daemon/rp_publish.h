@@ -21,6 +21,7 @@
 #include "rigpose/rp_frame.h"
 #include "rigpose/rp_hal.h"
 #include "rigpose/rp_status.h"
+#include "rigpose_features_t.h"
 #include "rigpose_image_t.h"
 #include "rigpose_pose_t.h"
 #include "rigpose_status_t.h"
@@ -45,6 +46,8 @@ const char *rp_pub_status_str(rp_pub_status_t s);
      2 * 6 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 2 + 4 + 4)
 #define RP_PUB_IMAGE_HEAD_BYTES (RP_PUB_HASH_BYTES + 8 + 4 + 1 + 2 + 2 + 4)
 #define RP_PUB_IMAGE_BYTES (RP_PUB_IMAGE_HEAD_BYTES + (RP_HAL_MAX_W) * (RP_HAL_MAX_H))
+#define RP_PUB_FEATS_MAX 512 /* features_t's arrays */
+#define RP_PUB_FEATS_BYTES (RP_PUB_HASH_BYTES + 8 + 4 + 1 + 2 + (4 + 4 + 4) * RP_PUB_FEATS_MAX)
 
 /* The pose message of one set: est (step status st) for set, pose counter seq, the rig's
  * n_cams and the method (pose_t.METHOD_*). publish_utime is left 0: the caller stamps it just
@@ -62,5 +65,11 @@ rp_pub_status_t rp_pub_image(lcm_t *lcm, const char *channel, const rigpose_imag
  * camera in *bad_cam (optional, -1 if none). */
 rp_pub_status_t rp_pub_set_images(lcm_t *lcm, const char *channel, const rp_hal_set_t *set,
                                   int32_t seq, int *bad_cam);
+
+/* The features of fs (the set the estimator used) as one rigpose_features_t per camera
+ * 0..n_cams-1 on channel, tagged with seq; a camera's features past RP_PUB_FEATS_MAX are cut.
+ * Goes on after a failure; returns the first one and its camera in *bad_cam (-1: none). */
+rp_pub_status_t rp_pub_set_features(lcm_t *lcm, const char *channel, const rp_frameset_t *fs,
+                                    uint8_t n_cams, int32_t seq, int *bad_cam);
 
 #endif /* RP_PUBLISH_H */

@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
 # Installs what rigpose needs to build, test and benchmark, from Debian's packages (and PyPI for
 # Python-side tools). Idempotent: checks each package first and only calls apt-get for the
-# missing ones, so a second run costs a few dpkg queries.
+# missing ones, so a second run costs a few dpkg queries. The Java side (liblcm-java, a JDK, a
+# JRE with AWT and jchart2d for lcm-spy) builds the jar of the LCM types; Xvfb, ImageMagick,
+# x11-utils, xdotool take lcm-spy's screenshot (scripts/lcm-spy-screenshot.sh).
 #
 # usage: scripts/install-deps.sh [host|cross|py|all]   (default: all)
 #   host   Debian packages for the host build, tests, tools, the V4L2 VM test and the fuzz
 #          targets (clang with its libFuzzer runtime, libclang-rt-14-dev: Debian 12's clang 14)
 #   cross  the aarch64 toolchain, qemu-user and arm64 libraries (Debian multiarch)
 #   py     host + a virtual environment .venv/ (Debian's python3) with the PyPI packages of
-#          the Python-side clients and tests (lcm bindings, evo)
+#          the Python-side clients and tests (lcm bindings, evo; foxglove-sdk for rigpose-view,
+#          mcap, mcap-protobuf-support and websockets to check its output)
 set -euo pipefail
 
 want=${1:-all}
@@ -18,7 +21,8 @@ host_pkgs=(build-essential g++ make pkg-config
            libopencv-dev libopengv-dev libyaml-dev valgrind
            python3 python3-venv opencv-doc
            qemu-system-x86 busybox-static xz-utils cpio libpng-dev libjpeg-dev
-           clang libclang-rt-14-dev)
+           liblcm-java libjchart2d-java default-jdk-headless default-jre xvfb imagemagick
+           x11-utils xdotool clang libclang-rt-14-dev)
 cross_pkgs=(gcc-aarch64-linux-gnu g++-aarch64-linux-gnu qemu-user libcmocka-dev:arm64)
 
 SUDO=""
@@ -28,8 +32,8 @@ missing=()
 is_installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
 
 pkgs=()
-py_pkgs=(lcm evo numpy)
-py_imports="import lcm, evo, numpy"
+py_pkgs=(lcm evo numpy foxglove-sdk mcap mcap-protobuf-support websockets)
+py_imports="import lcm, evo, numpy, foxglove, mcap, mcap_protobuf, websockets"
 VENV=${RIGPOSE_VENV:-$(cd "$(dirname "$0")/.." && pwd)/.venv}
 
 case "$want" in

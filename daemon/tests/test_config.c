@@ -3,11 +3,16 @@
  * the embedded default loads into the simulator's rig; defaults fill what a file leaves out;
  * every bad file (missing keys, wrong types, impossible values, unknown keys, broken YAML) is
  * refused with its own status and a message "FILE:LINE: KEY: ..." naming the right line and key;
- * no truncation of a valid file crashes the parser.
+ * no truncation of a valid file crashes the parser; hostile files (deep nesting, a second
+ * document, too large, control characters in values) are refused fast with an escaped message;
+ * intrinsics outside the sane range and distortion that folds inside the image are refused
+ * while real lenses' calibrations pass.
  */
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "../../host_tools/common/rp_cfg_diff.h"
 #include "rigpose/rp_config.h"
@@ -247,6 +252,10 @@ static const bad_case_t bad[] = {
     {3, "  kind: replay", RP_CFG_E_MISSING, "bad.yaml:3: source.replay_index: missing"},
     {4, "  timeout_ms: 500\n  timeout_ms: 600", RP_CFG_E_RANGE,
      "bad.yaml:5: source.timeout_ms: key given twice"},
+    {6, "  - name: \"le\\eft\"", RP_CFG_E_RANGE,
+     "bad.yaml:6: cameras[0].name: control character 0x1b at 2: 'le\\x1bft'"},
+    {7, "    device: \"/dev/video0\\n\"", RP_CFG_E_RANGE,
+     "bad.yaml:7: cameras[0].device: control character 0x0a at 11"},
     /* broken YAML */
     {10, "    intrinsics: [500, 500", RP_CFG_E_SYNTAX, "bad.yaml:11: (yaml):"},
     {6, "  - name: left\n   bad indent: 1", RP_CFG_E_SYNTAX, "bad.yaml:"},
@@ -286,6 +295,191 @@ static void test_whole_file_errors(void **state)
     snprintf(text, sizeof text, "%smeta:\n  written_by: rigpose-calib\n  rms_px: [0.2, 0.3]\n",
              edited(0, NULL));
     assert_int_equal(parse(text), RP_CFG_OK);
+}
+
+/* Every byte of the message is printable ASCII. */
+static void assert_printable(const char *msg)
+{
+    for (const unsigned char *p = (const unsigned char *)msg; *p != '\0'; p++) {
+        if (*p < 0x20 || *p >= 0x7f) {
+            fail_msg("byte 0x%02x in message: %s", *p, msg);
+        }
+    }
+}
+
+static double seconds_since(clock_t t0) { return (double)(clock() - t0) / CLOCKS_PER_SEC; }
+
+/* Hostile files are refused with RP_CFG_E_SYNTAX before a document is built: nesting deeper
+ * than RP_CFG_MAX_DEPTH anywhere (100,000 levels under meta: took libyaml's loader over a
+ * minute), a second document, more than RP_CFG_MAX_BYTES; control characters from a value are
+ * escaped in the message. */
+static void test_hostile_files(void **state)
+{
+    (void)state;
+    static char text[400000];
+    /* 100,000 flow levels under meta: refused at once. */
+    size_t n = (size_t)snprintf(text, sizeof text, "%smeta: ", edited(0, NULL));
+    for (int i = 0; i < 100000; ++i) {
+        text[n++] = '[';
+    }
+    for (int i = 0; i < 100000; ++i) {
+        text[n++] = ']';
+    }
+    text[n++] = '\n';
+    text[n] = '\0';
+    clock_t t0 = clock();
+    assert_int_equal(parse(text), RP_CFG_E_SYNTAX);
+    printf("100,000 levels under meta: %s (%.3f s)\n", g_err, seconds_since(t0));
+    assert_non_null(strstr(g_err, "bad.yaml:26: (yaml): nested deeper than 32 levels"));
+    assert_true(seconds_since(t0) < 2.0);
+    /* 40 block levels refused, 31 accepted (the top mapping is level 1). */
+    for (int levels = 31; levels <= 40; levels += 9) {
+        n = (size_t)snprintf(text, sizeof text, "%smeta:\n", edited(0, NULL));
+        for (int i = 1; i < levels; ++i) {
+            n += (size_t)snprintf(text + n, sizeof text - n, "%*sk%d:\n", 2 * i, "", i);
+        }
+        n += (size_t)snprintf(text + n, sizeof text - n, "%*sleaf: 1\n", 2 * levels, "");
+        const rp_cfg_status_t st = parse(text);
+        printf("%d levels: %s\n", levels + 1, st == RP_CFG_OK ? "accepted" : g_err);
+        assert_int_equal(st, levels == 31 ? RP_CFG_OK : RP_CFG_E_SYNTAX);
+    }
+    /* 100,001 nodes under meta: refused; 90,000 accepted. */
+    for (int nodes = 90000; nodes <= 100001; nodes += 10001) {
+        n = (size_t)snprintf(text, sizeof text, "%smeta: [", edited(0, NULL));
+        for (int i = 0; i < nodes; ++i) {
+            n += (size_t)snprintf(text + n, sizeof text - n, "%s1", i ? "," : "");
+        }
+        snprintf(text + n, sizeof text - n, "]\n");
+        const rp_cfg_status_t st = parse(text);
+        printf("%d nodes under meta: %s\n", nodes, st == RP_CFG_OK ? "accepted" : g_err);
+        assert_int_equal(st, nodes == 90000 ? RP_CFG_OK : RP_CFG_E_SYNTAX);
+    }
+    assert_non_null(strstr(g_err, "bad.yaml:26: (yaml): more than 100000 nodes"));
+    /* A second document, even a valid one. */
+    snprintf(text, sizeof text, "%s---\n%s", edited(0, NULL), edited(0, NULL));
+    assert_int_equal(parse(text), RP_CFG_E_SYNTAX);
+    printf("second document: %s\n", g_err);
+    assert_non_null(strstr(g_err, "bad.yaml:26: (yaml): a second document"));
+    /* Larger than RP_CFG_MAX_BYTES, in memory and as a file (padded with a comment). */
+    char *big = malloc((size_t)RP_CFG_MAX_BYTES + 100);
+    assert_non_null(big);
+    n = (size_t)snprintf(big, (size_t)RP_CFG_MAX_BYTES + 100, "%s#", edited(0, NULL));
+    memset(big + n, 'x', (size_t)RP_CFG_MAX_BYTES + 98 - n);
+    big[RP_CFG_MAX_BYTES + 98] = '\n';
+    big[RP_CFG_MAX_BYTES + 99] = '\0';
+    assert_int_equal(rp_config_parse(big, strlen(big), "big.yaml", &g_cfg, g_err, sizeof g_err),
+                     RP_CFG_E_SYNTAX);
+    assert_non_null(strstr(g_err, "big.yaml:0: (file): larger than 1048576 bytes"));
+    char path[] = "/tmp/rp_cfg_big_XXXXXX";
+    const int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    assert_true(write(fd, big, strlen(big)) == (ssize_t)strlen(big));
+    close(fd);
+    assert_int_equal(rp_config_load(path, &g_cfg, g_err, sizeof g_err), RP_CFG_E_SYNTAX);
+    printf("big file: %s\n", g_err);
+    assert_non_null(strstr(g_err, "larger than 1048576 bytes"));
+    /* The same file cut under the limit loads. */
+    assert_int_equal(truncate(path, 100000), 0);
+    assert_int_equal(rp_config_load(path, &g_cfg, g_err, sizeof g_err), RP_CFG_OK);
+    remove(path);
+    free(big);
+    assert_int_equal(rp_config_load("/tmp", &g_cfg, g_err, sizeof g_err), RP_CFG_E_OPEN);
+    assert_non_null(strstr(g_err, "/tmp:0: (file): is a directory"));
+    /* Control characters of a value (a terminal escape, a newline) come out escaped. */
+    assert_int_equal(parse(edited(23, "  pairs: [[left, \"r\\e[2J\\nrm -rf\\u0085x\"]]")),
+                     RP_CFG_E_RANGE);
+    printf("escaped: %s\n", g_err);
+    assert_printable(g_err);
+    assert_non_null(strstr(g_err, "no camera is named 'r\\x1b[2J\\x0arm -rf\\xc2\\x85x'"));
+    assert_int_equal(parse(edited(22, "  method: st\xff\xfe")), RP_CFG_E_SYNTAX); /* not UTF-8 */
+    printf("invalid UTF-8: %s\n", g_err);
+    assert_printable(g_err);
+    assert_non_null(strstr(g_err, "bad.yaml:22: (yaml): invalid leading UTF-8 octet at byte"));
+}
+
+/* Intrinsics: fx, fy within [0.1, 100] x the larger image side, fy / fx within [1/4, 4]. */
+static void test_intrinsics_range(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *in;
+        int ok;
+    } cases[] = {
+        {"[500, 500, 320, 240]", 1},      {"[64, 64, 320, 240]", 1},
+        {"[64000, 64000, 320, 240]", 1},  {"[500, 1999, 320, 240]", 1},
+        {"[1e-300, 500, 320, 240]", 0},   {"[500, 1e-300, 320, 240]", 0},
+        {"[63, 63, 320, 240]", 0},        {"[64001, 64001, 320, 240]", 0},
+        {"[1e9, 1e9, 320, 240]", 0},      {"[500, 2001, 320, 240]", 0},
+        {"[500, 124, 320, 240]", 0},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char line[96];
+        snprintf(line, sizeof line, "    intrinsics: %s", cases[i].in);
+        const rp_cfg_status_t st = parse(edited(10, line));
+        printf("intrinsics %-26s %s\n", cases[i].in, st == RP_CFG_OK ? "accepted" : g_err);
+        assert_int_equal(st, cases[i].ok ? RP_CFG_OK : RP_CFG_E_RANGE);
+        if (!cases[i].ok) {
+            assert_non_null(strstr(g_err, "bad.yaml:10: cameras[0].intrinsics: f"));
+        }
+    }
+}
+
+/* Distortion that folds inside the image (rays turning back, pixels without a ray) or stretches
+ * it beyond what a lens does is refused, naming the pixel; real calibrations pass: EuRoC's
+ * cam0, OpenCV's sample camera, KITTI raw's camera 0 (scaled to 640x480 where larger). */
+static void test_distortion_folding_inside_the_image(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *intr, *dist;
+        int ok;
+        int height; /* of the camera (0: the base's 480) */
+    } cases[] = {
+        {"[458.654, 457.296, 320, 240]", "[-0.28340811, 0.07395907, 0.00019359, 1.76e-05, 0]", 1, 0},
+        {"[536.07, 536.02, 342.37, 235.54]", "[-0.2651, -0.0467, 0.0018, -0.0003, 0.2523]", 1, 0},
+        {"[441.2, 441.2, 320, 117.5]", "[-0.3691481, 0.1968681, 0.001353473, 0.0005677587, "
+                                       "-0.06770705]", 1, 235},
+        /* KITTI's model folds at a distorted radius of 0.81: a taller image reaches the fold */
+        {"[441.2, 441.2, 320, 240]", "[-0.3691481, 0.1968681, 0.001353473, 0.0005677587, "
+                                     "-0.06770705]", 0, 0},
+        {"[500, 500, 320, 240]", "[0.1, -0.05, 0, 0, 0]", 1, 0},
+        {"[500, 500, 320, 240]", "[2, 0, 0, 0, 0]", 1, 0},
+        {"[500, 500, 320, 240]", "[99, 0, 0, 0, 0]", 0, 0},
+        {"[500, 500, 320, 240]", "[-99, 0, 0, 0, 0]", 0, 0},
+        {"[500, 500, 320, 240]", "[-1, 0, 0, 0, 0]", 0, 0},
+        {"[500, 500, 320, 240]", "[0, 99, 0, 0, 0]", 0, 0},
+        {"[500, 500, 320, 240]", "[0, -99, 0, 0, 0]", 0, 0},
+        {"[500, 500, 320, 240]", "[0, 0, 99, 0, 0]", 0, 0},
+        {"[500, 500, 320, 240]", "[0, 0, 0, -99, 0]", 0, 0},
+        {"[500, 500, 320, 240]", "[0, 0, 0, 0, 99]", 0, 0},
+        {"[500, 500, 320, 240]", "[0, 0, 0, 0, -99]", 0, 0},
+        {"[500, 500, 320, 240]", "[-0.5, 0.01, 0, 0, 0]", 0, 0},
+        {"[800, 800, 320, 240]", "[0, 0, 0.5, 0, 0]", 0, 0},
+    };
+    unsigned misjudged = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char lines[160];
+        snprintf(lines, sizeof lines, "    height: %d\n    intrinsics: %s\n    distortion: %s",
+                 cases[i].height > 0 ? cases[i].height : 480, cases[i].intr, cases[i].dist);
+        edited(18, NULL);
+        char text[8192];
+        snprintf(text, sizeof text, "%s", g_text); /* lines 1..17, 19.. of the base */
+        const char *at = strstr(text, "    height: 480\n    intrinsics: [500, 500, 320, 240]\n"
+                                      "    position: [0.1");
+        assert_non_null(at);
+        char out[8192];
+        snprintf(out, sizeof out, "%.*s%s%s", (int)(at - text), text, lines,
+                 at + strlen("    height: 480\n    intrinsics: [500, 500, 320, 240]"));
+        const rp_cfg_status_t st = parse(out);
+        const int ok = cases[i].ok ? st == RP_CFG_OK
+                                   : st == RP_CFG_E_RANGE &&
+                                         strstr(g_err, "bad.yaml:18: cameras[1].distortion: ") ==
+                                             g_err;
+        printf("%s %-34s %s\n", ok ? "ok  " : "FAIL", cases[i].dist,
+               st == RP_CFG_OK ? "accepted" : g_err);
+        misjudged += !ok;
+    }
+    assert_int_equal(misjudged, 0);
 }
 
 /* A replay index is found relative to the configuration file's folder. */
@@ -347,6 +541,49 @@ static void test_single_camera_methods(void **state)
 
 /* No prefix of a valid file crashes the parser or passes half-read: each is either the full
  * file's result or an error with a message. */
+/* 3,000 corrupted copies of config/sim.yaml (1..8 bytes each replaced by a random byte, a
+ * control character, a bracket, a quote, a colon or a newline; a fixed seed): each accepted or
+ * refused with a printable "sim.yaml:LINE: ..." message, never a crash (ASan, UBSan). */
+static void test_corrupted_files_never_crash(void **state)
+{
+    (void)state;
+    static char orig[16384], text[16384];
+    FILE *f = fopen("config/sim.yaml", "rb");
+    assert_non_null(f);
+    const size_t n = fread(orig, 1, sizeof orig - 1, f);
+    fclose(f);
+    static const char special[] = "\n\t\r\x1b\x7f\xff\xc2[]{}'\":&*!|>%@`-#, 0";
+    uint32_t rng = 12345u;
+    unsigned ok = 0, refused = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+        memcpy(text, orig, n);
+        rng = rng * 1664525u + 1013904223u;
+        const unsigned edits = 1u + (rng >> 16) % 8u;
+        for (unsigned e = 0; e < edits; ++e) {
+            rng = rng * 1664525u + 1013904223u;
+            const size_t at = (size_t)(rng >> 8) % n;
+            rng = rng * 1664525u + 1013904223u;
+            text[at] = (rng >> 24) & 1 ? (char)(rng >> 16)
+                                       : special[(rng >> 8) % (sizeof special - 1)];
+        }
+        g_err[0] = '\0';
+        const rp_cfg_status_t st = rp_config_parse(text, n, "sim.yaml", &g_cfg, g_err,
+                                                   sizeof g_err);
+        if (st == RP_CFG_OK) {
+            ++ok;
+            continue;
+        }
+        ++refused;
+        if (strncmp(g_err, "sim.yaml:", 9) != 0) {
+            fail_msg("trial %d: status %d, message '%s'", trial, (int)st, g_err);
+        }
+        assert_printable(g_err);
+    }
+    printf("3000 corrupted copies of config/sim.yaml: %u accepted, %u refused with a printable "
+           "message\n", ok, refused);
+    assert_true(refused > 1000);
+}
+
 static void test_truncated_files_never_crash(void **state)
 {
     (void)state;
@@ -508,6 +745,7 @@ static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
     else if (IS("gate_chi2")) v[0] = (double)e->gate_chi2;
     else if (IS("iterations")) v[0] = e->iterations;
     else if (IS("min_features")) v[0] = e->min_features;
+    else if (IS("max_predict_s")) v[0] = (double)e->max_predict_s;
     else if (IS("min_tracked")) {
         v[0] = st ? p->stereo.min_tracked : gc ? p->gc.min_tracked : p->mono.min_tracked;
     } else if (IS("default_dt_s")) {
@@ -699,7 +937,7 @@ static void test_readme_lists_the_core_defaults(void **state)
     printf("config/README.md: %u estimator and %u tracker defaults match the core's\n",
            est_rows, trk_rows);
     /* every setting the parser knows is listed (rp_config.c's keys but method, pairs, cams) */
-    assert_int_equal(est_rows, 20);
+    assert_int_equal(est_rows, 21);
     assert_int_equal(trk_rows, 7);
 }
 
@@ -713,9 +951,13 @@ int main(void)
         cmocka_unit_test(test_gc_metric_scale_sigma),
         cmocka_unit_test(test_each_bad_file_names_line_and_key),
         cmocka_unit_test(test_whole_file_errors),
+        cmocka_unit_test(test_hostile_files),
+        cmocka_unit_test(test_intrinsics_range),
+        cmocka_unit_test(test_distortion_folding_inside_the_image),
         cmocka_unit_test(test_replay_index_is_relative_to_the_file),
         cmocka_unit_test(test_single_camera_methods),
         cmocka_unit_test(test_truncated_files_never_crash),
+        cmocka_unit_test(test_corrupted_files_never_crash),
         cmocka_unit_test(test_minimal_file_is_the_core_default_for_every_layout),
         cmocka_unit_test(test_a_key_given_overrides_only_itself),
         cmocka_unit_test(test_readme_lists_the_core_defaults),

@@ -246,6 +246,72 @@ static void test_one_sets_publish_path_allocates_nothing(void **state)
     lcm_destroy(lcm);
 }
 
+/* rigpose_features_t: every camera's tracked features reach a subscriber, cut at 512, and
+ * publishing them allocates nothing. */
+typedef struct {
+    unsigned n;
+    rigpose_features_t m[2];
+} feats_rx_t;
+static void on_features(const lcm_recv_buf_t *rb, const char *ch, void *user)
+{
+    (void)ch;
+    feats_rx_t *rx = user;
+    assert_true(rx->n < 2);
+    assert_true(rigpose_features_t_decode(rb->data, 0, (int)rb->data_size, &rx->m[rx->n]) > 0);
+    rx->n++;
+}
+static void test_features_reach_a_subscriber_without_allocating(void **state)
+{
+    (void)state;
+    static rp_frameset_t fs;
+    memset(&fs, 0, sizeof fs);
+    fs.utime = 123456;
+    fs.n[0] = 3;
+    fs.n[1] = RP_MAX_FEATS_PER_CAM;
+    for (uint16_t i = 0; i < RP_MAX_FEATS_PER_CAM; ++i) {
+        fs.f[0][i].id = 1000u + i;
+        fs.f[0][i].uv[0] = (rp_real)(10 + i);
+        fs.f[0][i].uv[1] = (rp_real)(20 + i);
+        fs.f[1][i].id = 5000u + i;
+        fs.f[1][i].uv[0] = (rp_real)0.5;
+        fs.f[1][i].uv[1] = (rp_real)i;
+    }
+    rigpose_features_t empty;
+    memset(&empty, 0, sizeof empty);
+    assert_int_equal(rigpose_features_t_encoded_size(&empty), RP_PUB_FEATS_BYTES);
+
+    lcm_t *lcm = lcm_create("memq://");
+    assert_non_null(lcm);
+    feats_rx_t rx;
+    memset(&rx, 0, sizeof rx);
+    lcm_subscribe(lcm, "IMAGE_FEATURES", on_features, &rx);
+    int bad_cam = 0;
+    g_allocs = 0;
+    g_counting = 1;
+    const rp_pub_status_t st = rp_pub_set_features(lcm, "IMAGE_FEATURES", &fs, 2, 7, &bad_cam);
+    g_counting = 0;
+    assert_int_equal(st, RP_PUB_OK);
+    assert_int_equal(bad_cam, -1);
+    assert_int_equal(g_allocs, 0);
+    drain(lcm);
+    assert_int_equal(rx.n, 2);
+    assert_int_equal(rx.m[0].cam, 0);
+    assert_int_equal(rx.m[0].seq, 7);
+    assert_true(rx.m[0].utime == 123456);
+    assert_int_equal(rx.m[0].n, 3);
+    assert_int_equal(rx.m[0].id[2], 1002);
+    assert_near(rx.m[0].u[2], 12.0, 1e-6);
+    assert_near(rx.m[0].v[2], 22.0, 1e-6);
+    assert_int_equal(rx.m[0].id[3], 0); /* past n: zero */
+    assert_int_equal(rx.m[1].cam, 1);
+    assert_int_equal(rx.m[1].n, RP_MAX_FEATS_PER_CAM < RP_PUB_FEATS_MAX ? RP_MAX_FEATS_PER_CAM
+                                                                      : RP_PUB_FEATS_MAX);
+    assert_near(rx.m[1].v[rx.m[1].n - 1], (double)(rx.m[1].n - 1), 1e-6);
+    assert_int_equal(rp_pub_set_features(lcm, "", &fs, 2, 0, &bad_cam), RP_PUB_E_ARG);
+    assert_int_equal(rp_pub_set_features(lcm, "X", NULL, 2, 0, &bad_cam), RP_PUB_E_ARG);
+    lcm_destroy(lcm);
+}
+
 static void test_the_count_sees_lcm_gens_own_publish_allocate(void **state)
 {
     (void)state;
@@ -299,6 +365,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_the_buffers_are_the_largest_encodings),
         cmocka_unit_test(test_one_sets_publish_path_allocates_nothing),
+        cmocka_unit_test(test_features_reach_a_subscriber_without_allocating),
         cmocka_unit_test(test_the_count_sees_lcm_gens_own_publish_allocate),
         cmocka_unit_test(test_bad_arguments_have_their_own_status),
     };

@@ -6,7 +6,7 @@
  *    from each camera's own board trajectory over a common rig motion (AX = XB);
  *  - the daemon's YAML configuration (config/README.md) from the result.
  *
- * Conventions (DESIGN.md): camera axes x right, y down, z forward; a pose "A in B" maps A's
+ * Conventions (docs/design.md): camera axes x right, y down, z forward; a pose "A in B" maps A's
  * coordinates to B's: p_B = R p_A + t. The rig's R_k is camera k to cam1 and D_k camera k's
  * centre in cam1's frame, metres.
  */

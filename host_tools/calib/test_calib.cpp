@@ -319,7 +319,7 @@ static void hand_eye_case(const char *name, const rpc::Pose &X, double noise_px,
 static void test_hand_eye()
 {
     rpc::Pose cam2, cam3;
-    cam2.R = cv::Matx33d(0, 0, 1, 0, 1, 0, -1, 0, 0); /* looking +x (DESIGN.md) */
+    cam2.R = cv::Matx33d(0, 0, 1, 0, 1, 0, -1, 0, 0); /* looking +x (docs/design.md) */
     cam2.t = cv::Vec3d(0.0866025403784439, 0, -0.05);
     cam3.R = cv::Matx33d(-1, 0, 0, 0, 1, 0, 0, 0, -1); /* looking -z */
     cam3.t = cv::Vec3d(0, 0, -0.1);

@@ -16,6 +16,9 @@
  *   --channel NAME          pose channel in LCM logs (default RIGPOSE_POSE)
  *   --tum-dir DIR           write NAME.tum and truth.tum (the associated poses)
  *   --kitti-dir DIR         write NAME.kitti and truth.kitti (the associated poses, same rows)
+ *   --euroc-dir DIR         write NAME.csv and truth.csv in EuRoC's ground-truth CSV
+ *                           (timestamp ns, p_RS_R xyz, q_RS_w wxyz; `evo_ape euroc` reads it)
+ *   --format tum|kitti|euroc --out-dir DIR   the same as --tum-dir / --kitti-dir / --euroc-dir DIR
  *   --plot FILE.png         six panels: tx ty tz alpha beta gamma against frame
  *   --title TEXT            the plot's title
  *   --json FILE             {"eval_<name>_ate_rmse_m": ..., "eval_<name>_rpe_trans_rmse_m": ...}
@@ -43,7 +46,8 @@ void usage(FILE *out)
     std::fprintf(out,
                  "usage: rigpose-eval [--truth FILE] [--est [NAME=]FILE]... [FILE...]\n"
                  "         [--align none|se3|sim3] [--delta N] [--max-dt-us N] [--channel NAME]\n"
-                 "         [--tum-dir DIR] [--kitti-dir DIR] [--plot FILE.png] [--title TEXT]\n"
+                 "         [--tum-dir DIR] [--kitti-dir DIR] [--euroc-dir DIR]\n"
+                 "         [--format tum|kitti|euroc --out-dir DIR] [--plot FILE.png] [--title TEXT]\n"
                  "         [--json FILE] [--tolerant]\n"
                  "estimates: LCM log (rigpose.pose_t), TUM, rigpose CSV or KITTI; truth: truth.csv,\n"
                  "TUM, or the truth inside the first LCM log\n");
@@ -71,6 +75,7 @@ bool make_dir(const std::string &d)
 int main(int argc, char **argv)
 {
     std::string truth_path, channel = "RIGPOSE_POSE", tum_dir, kitti_dir, png, title, json;
+    std::string euroc_dir, format, out_dir;
     rpe::Align align = rpe::Align::none;
     int delta = 1;
     long long max_dt = 1000;
@@ -113,6 +118,12 @@ int main(int argc, char **argv)
             tum_dir = argv[++i];
         } else if (a == "--kitti-dir" && v) {
             kitti_dir = argv[++i];
+        } else if (a == "--euroc-dir" && v) {
+            euroc_dir = argv[++i];
+        } else if (a == "--format" && v) {
+            format = argv[++i];
+        } else if (a == "--out-dir" && v) {
+            out_dir = argv[++i];
         } else if (a == "--plot" && v) {
             png = argv[++i];
         } else if (a == "--title" && v) {
@@ -176,7 +187,17 @@ int main(int argc, char **argv)
     if (jf) {
         std::fprintf(jf, "{");
     }
-    if ((!tum_dir.empty() && !make_dir(tum_dir)) || (!kitti_dir.empty() && !make_dir(kitti_dir))) {
+    if (!format.empty() || !out_dir.empty()) {
+        std::string *dir = format == "tum" ? &tum_dir : format == "kitti" ? &kitti_dir
+                         : format == "euroc" ? &euroc_dir : nullptr;
+        if (!dir || out_dir.empty()) {
+            std::fprintf(stderr, "rigpose-eval: --format tum|kitti|euroc goes with --out-dir DIR\n");
+            return 2;
+        }
+        *dir = out_dir;
+    }
+    if ((!tum_dir.empty() && !make_dir(tum_dir)) || (!kitti_dir.empty() && !make_dir(kitti_dir)) ||
+        (!euroc_dir.empty() && !make_dir(euroc_dir))) {
         std::fprintf(stderr, "rigpose-eval: cannot create the output folder\n");
         return 1;
     }
@@ -215,6 +236,12 @@ int main(int argc, char **argv)
         if (!kitti_dir.empty() &&
             (!rpe::write_kitti(kitti_dir + "/" + e.name + ".kitti", ae, &why) ||
              !rpe::write_kitti(kitti_dir + "/truth_" + e.name + ".kitti", at, &why))) {
+            std::fprintf(stderr, "rigpose-eval: %s\n", why.c_str());
+            rc = 1;
+        }
+        if (!euroc_dir.empty() &&
+            (!rpe::write_euroc(euroc_dir + "/" + e.name + ".csv", ae, &why) ||
+             !rpe::write_euroc(euroc_dir + "/truth.csv", truth, &why))) {
             std::fprintf(stderr, "rigpose-eval: %s\n", why.c_str());
             rc = 1;
         }

@@ -250,6 +250,27 @@ bool write_tum(const std::string &path, const Traj &t, std::string *why)
     return true;
 }
 
+bool write_euroc(const std::string &path, const Traj &t, std::string *why)
+{
+    FILE *f = std::fopen(path.c_str(), "w");
+    if (!f) {
+        *why = "cannot write " + path;
+        return false;
+    }
+    std::fprintf(f, "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],"
+                    "q_RS_y [],q_RS_z []\n");
+    for (const Pose &p : t) {
+        const cv::Vec4d q = rot_to_quat(p.R);
+        std::fprintf(f, "%" PRId64 ",%.9f,%.9f,%.9f,%.12f,%.12f,%.12f,%.12f\n", p.utime * 1000,
+                     p.t[0], p.t[1], p.t[2], q[0], q[1], q[2], q[3]);
+    }
+    if (std::fclose(f) != 0) {
+        *why = "write error on " + path;
+        return false;
+    }
+    return true;
+}
+
 bool write_kitti(const std::string &path, const Traj &t, std::string *why)
 {
     FILE *f = std::fopen(path.c_str(), "w");

@@ -1,10 +1,10 @@
 /*
  * rp_eval.hpp - trajectories of rigpose runs: reading (TUM, rigpose CSV, KITTI, LCM logs of the
- * daemon's rigpose.pose_t), writing (TUM, KITTI), association by timestamp, absolute trajectory
- * error with optional SE(3) / Sim(3) Umeyama alignment, relative pose error, and the paper's
+ * daemon's rigpose.pose_t), writing (TUM, KITTI, EuRoC), association by timestamp, absolute
+ * trajectory error with optional SE(3) / Sim(3) Umeyama alignment, relative pose error, and the paper's
  * Fig. 3/4-style six-panel plot. Host only (OpenCV for the drawing).
  *
- * Conventions (DESIGN.md): a pose is cam1 in the world, p_world = R p_cam1 + t; angles
+ * Conventions (docs/design.md): a pose is cam1 in the world, p_world = R p_cam1 + t; angles
  * (alpha, beta, gamma) with R = Rz(gamma) Ry(beta) Rx(alpha); quaternions (w, x, y, z) here,
  * written in TUM's order (x, y, z, w); metres, radians; utime in microseconds.
  */
@@ -48,6 +48,9 @@ bool load(const std::string &path, const std::string &channel, Traj *out, Traj *
 
 bool write_tum(const std::string &path, const Traj &t, std::string *why);
 bool write_kitti(const std::string &path, const Traj &t, std::string *why);
+/* EuRoC's ground-truth CSV (state_groundtruth_estimate0/data.csv, the first 8 columns):
+ * "timestamp [ns], p_RS_R_x [m], p_RS_R_y, p_RS_R_z, q_RS_w [], q_RS_x, q_RS_y, q_RS_z". */
+bool write_euroc(const std::string &path, const Traj &t, std::string *why);
 
 /* Pairs (index in est, index in ref) with |utime difference| <= max_dt_us, each ref pose used
  * at most once, in time order (nearest neighbour). */

@@ -7,7 +7,9 @@
 #   sim-stereo4, sim-gc: the daemon on the simulated rig (config/sim.yaml), 100 sets each;
 #   render-stereo4: a 12-set rendered replay folder (rigpose-render) through the daemon's image
 #                   pipeline, truth from truth.csv.
-# Also: the KITTI export is read back by evo_traj.
+# Also: the KITTI and EuRoC exports are read back by evo_traj, and the EuRoC truth export
+# (--format euroc) is the reference of evo_ape euroc, whose ATE statistics equal evo_ape tum's on
+# the TUM export to 1e-9 m.
 set -u
 eval_bin=${RP_EVAL_BIN:-build/release/rigpose-eval}
 daemon=${RP_DAEMON_BIN:-build/release/rigpose}
@@ -69,10 +71,29 @@ PYEOF
 )
     echo "  $run $align (rigpose-eval/evo): $res"
     check "$run $align: rigpose-eval and evo agree to 1e-6 m" '[[ "$res" == *" OK" ]]'
+    # The EuRoC export (--format euroc) read by evo_ape euroc, which takes EuRoC's ground-truth
+    # CSV as the reference and a TUM estimate: the same result as evo_ape tum on the TUM pair.
+    "$eval_bin" "${truth[@]}" --est "$run=$work/$run.log" --format euroc \
+        --out-dir "$work/euroc" > /dev/null 2>&1
+    "$EVO/evo_ape" euroc "$work/euroc/truth.csv" "$work/tum/$run.tum" $flag --no_warnings \
+        --save_results "$work/ape-euroc-$run-$align.zip" > /dev/null 2>&1
+    res=$("$PY" - "$work/ape-$run-$align.zip" "$work/ape-euroc-$run-$align.zip" <<'PYEOF'
+import json, sys, zipfile
+tum = json.load(zipfile.ZipFile(sys.argv[1]).open("stats.json"))
+eur = json.load(zipfile.ZipFile(sys.argv[2]).open("stats.json"))
+worst = max(abs(tum[k] - eur[k]) for k in ("rmse", "mean", "median", "max", "min"))
+print("TUM rmse %.12f EuRoC rmse %.12f worst_diff %.3g" % (tum["rmse"], eur["rmse"], worst),
+      "OK" if worst < 1e-9 else "BAD")
+PYEOF
+)
+    echo "  $run $align (evo_ape tum / euroc): $res"
+    check "$run $align: evo_ape euroc on --format euroc equals evo_ape tum" '[[ "$res" == *" OK" ]]'
   done
 done
 
-# --- KITTI export read by evo ---------------------------------------------------------------
+# --- KITTI and EuRoC exports read by evo ------------------------------------------------------
+"$EVO/evo_traj" euroc "$work/euroc/sim-gc.csv" --no_warnings > "$work/traj-euroc.out" 2>&1
+check "evo_traj reads the EuRoC export (100 poses)" 'grep -q "100 poses" "$work/traj-euroc.out"'
 "$EVO/evo_traj" kitti "$work/kitti/sim-gc.kitti" --no_warnings > "$work/traj.out" 2>&1
 check "evo_traj reads the KITTI export (100 poses)" 'grep -q "100 poses" "$work/traj.out"'
 

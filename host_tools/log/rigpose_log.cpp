@@ -18,6 +18,10 @@
  *       host_tools/common/rp_lcmlog.h: a truncated or corrupt log is refused with one line
  *       "FILE: offset N: what" and nothing is written; --tolerant reads on past bad stretches
  *       (one warning line per skip: offset and bytes skipped).
+ *   rigpose-log mcap FILE.log OUT.mcap [--config FILE] [rigpose-view options]
+ *       an LCM log (poses, status, images) into an MCAP file that opens in Foxglove with the
+ *       live view's topics and layout: runs `rigpose-view --lcm-log FILE.log --mcap OUT.mcap`,
+ *       the rigpose-view installed beside this program (host_tools/view/).
  *
  * Recording prints progress every second (sets, rate, driver drops, missing cameras, lost sets)
  * and a summary; nothing is lost silently: a set the source could not deliver (timeout, unreadable
@@ -26,8 +30,10 @@
  * Exit: 0 every set recorded, 1 some sets were lost (replay: or the log is truncated / corrupt),
  * 2 usage / configuration, 3 source or output could not be opened.
  */
+#include <limits.h>
 #include <signal.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cinttypes>
@@ -61,7 +67,8 @@ void usage(FILE *out)
                  "                          [--fast] [--listen URL] [--pose-channel NAME]\n"
                  "                          [--status-channel NAME] [--linger-ms MS] [--image-channel NAME]\n"
                  "       rigpose-log replay FILE.log --dir DIR [--config FILE] [--image-channel NAME]\n"
-                 "                          [--tolerant]\n");
+                 "                          [--tolerant]\n"
+                 "       rigpose-log mcap FILE.log OUT.mcap [--config FILE] [rigpose-view options]\n");
 }
 
 bool make_dir(const std::string &d)
@@ -572,10 +579,40 @@ int replay(int argc, char **argv)
     return incomplete ? 1 : 0;
 }
 
+/* `mcap`: hands the log to rigpose-view (Python, foxglove-sdk), found beside this program. */
+int to_mcap(int argc, char **argv)
+{
+    if (argc < 4) {
+        usage(stderr);
+        return 2;
+    }
+    char self[PATH_MAX];
+    const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n <= 0) {
+        std::fprintf(stderr, "rigpose-log: cannot find its own path: %s\n", std::strerror(errno));
+        return 3;
+    }
+    self[n] = '\0';
+    std::string view(self);
+    view = view.substr(0, view.find_last_of('/') + 1) + "rigpose-view";
+    std::vector<char *> args;
+    args.push_back(const_cast<char *>(view.c_str()));
+    const char *fixed[] = {"--lcm-log", argv[2], "--mcap", argv[3]};
+    for (const char *a : fixed) args.push_back(const_cast<char *>(a));
+    for (int i = 4; i < argc; i++) args.push_back(argv[i]);
+    args.push_back(nullptr);
+    execv(view.c_str(), args.data());
+    std::fprintf(stderr, "rigpose-log: cannot run %s: %s\n", view.c_str(), std::strerror(errno));
+    return 3;
+}
+
 } // namespace
 
 int main(int argc, char **argv)
 {
+    if (argc >= 2 && std::strcmp(argv[1], "mcap") == 0) {
+        return to_mcap(argc, argv);
+    }
     if (argc >= 2 && std::strcmp(argv[1], "record") == 0) {
         return record(argc, argv);
     }

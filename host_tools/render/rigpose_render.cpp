@@ -65,7 +65,7 @@ static bool write_rig_yaml(const std::string &path, const rpr::Sequence &seq)
         extra += b;
     }
     std::fprintf(f,
-                 "# Written by rigpose-render: the paper's six-camera rig (DESIGN.md). Schema:\n"
+                 "# Written by rigpose-render: the paper's six-camera rig (docs/design.md). Schema:\n"
                  "# config/README.md. Camera order = rig index; device = column of frames.csv.\n"
                  "version: 1\n\n"
                  "meta:\n  tool: rigpose-render\n  seed: %llu\n  run: %u\n  frames: %u\n"

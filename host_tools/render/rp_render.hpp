@@ -16,7 +16,7 @@
  * ray comes from rp_cam_unproject (the rig's distortion model), goes through the rig pose into
  * the world, and is intersected with the surface by a secant iteration on |C + t d| = r(dir).
  * A pixel is the mean of ss x ss sub-pixel samples (box filter over the pixel's area).
- * Conventions as DESIGN.md: pose of cam1 in the world (d_j, R_j); camera k at D_k, R_k.
+ * Conventions as docs/design.md: pose of cam1 in the world (d_j, R_j); camera k at D_k, R_k.
  */
 #ifndef RP_RENDER_HPP
 #define RP_RENDER_HPP
@@ -227,7 +227,7 @@ struct Effects {
 };
 void finish_image(const cv::Mat &albedo, const Effects &fx, cv::Mat *out8);
 
-/* The rig pose of a frame as DESIGN.md: translation and rotation matrix (double). */
+/* The rig pose of a frame as docs/design.md: translation and rotation matrix (double). */
 struct Pose {
     double d[3];
     double R[9];

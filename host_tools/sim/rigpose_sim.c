@@ -49,7 +49,7 @@
 
 static const char *const col_name[NCOL] = {"tx", "ty", "tz", "alpha", "beta", "gamma"};
 
-/* ---- the paper's Table 1 (DESIGN.md) ------------------------------------------------------- */
+/* ---- the paper's Table 1 (docs/design.md) ------------------------------------------------------- */
 
 typedef struct {
     const char *name;

@@ -1,5 +1,5 @@
 /*
- * rp_sim.c - the paper's simulation protocol (Table 1); see rp_sim.h and DESIGN.md.
+ * rp_sim.c - the paper's simulation protocol (Table 1); see rp_sim.h and docs/design.md.
  *
  * Everything is computed in double and converted to rp_real only where it enters core types
  * (the rig, the frame set), so the simulator is the same in float and double builds up to that

@@ -1,5 +1,5 @@
 /*
- * rp_sim.h - the paper's simulation protocol (Table 1), as DESIGN.md fixes it, for the
+ * rp_sim.h - the paper's simulation protocol (Table 1), as docs/design.md fixes it, for the
  * simulator, the benchmarks and the tests. Host code (may allocate), links the core only.
  *
  * Six cameras, all 640x480 with fx = fy = focal_px and the principal point at the centre:

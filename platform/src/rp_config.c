@@ -13,9 +13,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <yaml.h>
 
+#include "rigpose/rp_camera.h"
 #include "rigpose/rp_rot.h"
+#include "rp_esc_priv.h"
 
 const char *rp_cfg_status_str(rp_cfg_status_t s)
 {
@@ -33,6 +36,25 @@ const char *rp_cfg_status_str(rp_cfg_status_t s)
 }
 
 /* ---- context and error reporting ----------------------------------------------------------- */
+
+/* printf into err (err_len bytes, may be NULL / 0), control characters escaped (rp_esc_priv.h). */
+static void set_err(char *err, size_t err_len, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static void set_err(char *err, size_t err_len, const char *fmt, ...)
+{
+    if (err == NULL || err_len == 0) {
+        return;
+    }
+    char raw[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(raw, sizeof raw, fmt, ap);
+    va_end(ap);
+    rp_esc_text(err, err_len, raw);
+}
 
 typedef struct {
     const char *file;
@@ -59,7 +81,7 @@ static int fail(ctx_t *c, rp_cfg_status_t st, const yaml_node_t *at, const char 
         vsnprintf(msg, sizeof msg, fmt, ap);
         va_end(ap);
         const unsigned long line = at != NULL ? (unsigned long)at->start_mark.line + 1u : 0u;
-        snprintf(c->err, c->err_len, "%s:%lu: %s: %s", c->file, line, key, msg);
+        set_err(c->err, c->err_len, "%s:%lu: %s: %s", c->file, line, key, msg);
     }
     return -1;
 }
@@ -274,6 +296,14 @@ static int get_str(ctx_t *c, const yaml_node_t *map, const char *path, const cha
     if (n->data.scalar.length == 0 && !allow_empty) {
         return fail(c, RP_CFG_E_RANGE, n, kp, "must not be empty");
     }
+    for (size_t i = 0; i < n->data.scalar.length; ++i) {
+        const unsigned char ch = n->data.scalar.value[i];
+        if (ch < 0x20 || ch == 0x7f) { /* names, paths and channels get printed and logged */
+            return fail(c, RP_CFG_E_RANGE, n, kp,
+                        "control character 0x%02x at %zu: '%s' (names, paths and channels are "
+                        "printed)", ch, i, scalar(n));
+        }
+    }
     memcpy(out, scalar(n), n->data.scalar.length);
     out[n->data.scalar.length] = '\0';
     return 0;
@@ -311,6 +341,107 @@ static int get_nums(ctx_t *c, const yaml_node_t *map, const char *path, const ch
 }
 
 /* ---- cameras ------------------------------------------------------------------------------- */
+
+/* Sane intrinsics: fx, fy within these multiples of the larger image side (a horizontal field
+ * of view between about 0.6 and 157 degrees), and fy / fx within 1/ASPECT..ASPECT. */
+#define RP_CFG_F_MIN 0.1
+#define RP_CFG_F_MAX 100.0
+#define RP_CFG_ASPECT_MAX 4.0
+/* Distortion's local stretch: the singular values of d xd / d xn inside the image within
+ * 1/STRETCH..STRETCH (a real lens's radial-tangential model stays well inside; beyond it the
+ * model is near a fold, or maps a pixel to a ray several times off the pinhole's). */
+#define RP_CFG_STRETCH_MAX 5.0
+#define RP_CFG_RAY_STEPS 16   /* samples along each ray from the principal point */
+#define RP_CFG_BORDER_PTS 256 /* rays, to points spread along the image border */
+
+/* Point k of n spread evenly along the border of the image [0, w-1] x [0, h-1], clockwise
+ * from the top-left corner. */
+static void border_point(const rp_camera_t *cam, int k, int n, double uv[2])
+{
+    const double W = (double)cam->width - 1.0, H = (double)cam->height - 1.0;
+    double t = 2.0 * (W + H) * (double)k / (double)n;
+    if (t < W) {
+        uv[0] = t;
+        uv[1] = 0.0;
+    } else if ((t -= W) < H) {
+        uv[0] = W;
+        uv[1] = t;
+    } else if ((t -= H) < W) {
+        uv[0] = W - t;
+        uv[1] = H;
+    } else {
+        uv[0] = 0.0;
+        uv[1] = H - (t - W);
+    }
+}
+
+/* 1 (and why) if the distortion folds inside the image or stretches it beyond
+ * RP_CFG_STRETCH_MAX: along rays from the principal point to RP_CFG_BORDER_PTS points of the
+ * border (and the four corners), every sampled pixel must undistort (rp_cam_unproject), its
+ * normalised radius must grow along the ray and point the ray's way, and the distortion's
+ * Jacobian there must keep its orientation with singular values in 1/STRETCH..STRETCH. */
+static int distortion_unusable(const rp_camera_t *cam, char *why, size_t cap)
+{
+    if (cam->k1 == 0 && cam->k2 == 0 && cam->p1 == 0 && cam->p2 == 0 && cam->k3 == 0) {
+        return 0;
+    }
+    const int n_rays = RP_CFG_BORDER_PTS + 4;
+    for (int k = 0; k < n_rays; ++k) {
+        double b[2];
+        if (k < RP_CFG_BORDER_PTS) {
+            border_point(cam, k, RP_CFG_BORDER_PTS, b);
+        } else {
+            b[0] = (k - RP_CFG_BORDER_PTS) & 1 ? (double)cam->width - 1.0 : 0.0;
+            b[1] = (k - RP_CFG_BORDER_PTS) & 2 ? (double)cam->height - 1.0 : 0.0;
+        }
+        const double cx = (double)cam->cx, cy = (double)cam->cy;
+        const double dx = (b[0] - cx) / (double)cam->fx, dy = (b[1] - cy) / (double)cam->fy;
+        double r_prev = 0.0;
+        for (int s = 1; s <= RP_CFG_RAY_STEPS; ++s) {
+            const double t = (double)s / RP_CFG_RAY_STEPS;
+            const double u = cx + t * (b[0] - cx), v = cy + t * (b[1] - cy);
+            if (fabs(u - cx) + fabs(v - cy) < 1e-9) {
+                continue; /* the principal point itself (a corner ray of length 0) */
+            }
+            const rp_real uv[2] = {(rp_real)u, (rp_real)v};
+            rp_real xn[2], xd[2], J[4];
+            if (rp_cam_unproject(cam, uv, xn) != RP_OK ||
+                rp_cam_distort(cam, xn, xd, J) != RP_OK) {
+                snprintf(why, cap, "folds inside the image: pixel (%.0f, %.0f) has no ray "
+                         "(the model does not invert there)", u, v);
+                return 1;
+            }
+            const double x = (double)xn[0], y = (double)xn[1];
+            const double r = sqrt(x * x + y * y);
+            if (!(r > r_prev) || x * dx + y * dy <= 0.0) {
+                snprintf(why, cap, "folds inside the image: the rays turn back before pixel "
+                         "(%.0f, %.0f)", u, v);
+                return 1;
+            }
+            r_prev = r;
+            /* Singular values of the 2x2 J from its Gram matrix's eigenvalues. */
+            const double a = (double)J[0], bb = (double)J[1], cc = (double)J[2], d = (double)J[3];
+            const double det = a * d - bb * cc;
+            const double fro = a * a + bb * bb + cc * cc + d * d;
+            const double disc = sqrt(fmax(fro * fro - 4.0 * det * det, 0.0));
+            const double s_max = sqrt(0.5 * (fro + disc));
+            const double s_min = fabs(det) / fmax(s_max, 1e-300);
+            if (!(det > 0.0)) {
+                snprintf(why, cap, "folds inside the image at pixel (%.0f, %.0f)", u, v);
+                return 1;
+            }
+            if (s_max > RP_CFG_STRETCH_MAX || s_min < 1.0 / RP_CFG_STRETCH_MAX) {
+                const int stretch = s_max > RP_CFG_STRETCH_MAX;
+                snprintf(why, cap, "%s the image %.3g times at pixel (%.0f, %.0f) (at most %g: "
+                         "no real lens; the model is near a fold or far from the pinhole)",
+                         stretch ? "stretches" : "squeezes", stretch ? s_max : 1.0 / s_min, u, v,
+                         RP_CFG_STRETCH_MAX);
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
 
 static int parse_camera(ctx_t *c, const yaml_node_t *m, unsigned i, rp_config_t *cfg)
 {
@@ -351,8 +482,17 @@ static int parse_camera(ctx_t *c, const yaml_node_t *m, unsigned i, rp_config_t 
     }
     key_path(kp, path, "intrinsics");
     const yaml_node_t *n_in = map_get(c, m, "intrinsics");
-    if (!(in[0] > 0.0 && in[0] < 1e6 && in[1] > 0.0 && in[1] < 1e6)) {
-        return fail(c, RP_CFG_E_RANGE, n_in, kp, "fx, fy must be in (0, 1e6) px");
+    const double side = (double)(w > h ? w : h);
+    if (!(in[0] >= RP_CFG_F_MIN * side && in[0] <= RP_CFG_F_MAX * side &&
+          in[1] >= RP_CFG_F_MIN * side && in[1] <= RP_CFG_F_MAX * side)) {
+        return fail(c, RP_CFG_E_RANGE, n_in, kp,
+                    "fx, fy (%g, %g) must be in [%g, %g] px (%g to %g times the larger image "
+                    "side)", in[0], in[1], RP_CFG_F_MIN * side, RP_CFG_F_MAX * side, RP_CFG_F_MIN,
+                    RP_CFG_F_MAX);
+    }
+    if (!(in[1] >= in[0] / RP_CFG_ASPECT_MAX && in[1] <= in[0] * RP_CFG_ASPECT_MAX)) {
+        return fail(c, RP_CFG_E_RANGE, n_in, kp, "fy / fx = %g is outside [1/%g, %g]",
+                    in[1] / in[0], RP_CFG_ASPECT_MAX, RP_CFG_ASPECT_MAX);
     }
     if (!(in[2] >= 0.0 && in[2] < (double)w && in[3] >= 0.0 && in[3] < (double)h)) {
         return fail(c, RP_CFG_E_RANGE, n_in, kp, "principal point (%g, %g) outside the %lldx%lld image",
@@ -363,6 +503,20 @@ static int parse_camera(ctx_t *c, const yaml_node_t *m, unsigned i, rp_config_t 
             key_path(kp, path, "distortion");
             return fail(c, RP_CFG_E_RANGE, map_get(c, m, "distortion"), kp,
                         "coefficient %d (%g) is not in (-100, 100)", k, dist[k]);
+        }
+    }
+    {
+        rp_camera_t cam = rp_cam_pinhole((uint16_t)w, (uint16_t)h, (rp_real)in[0], (rp_real)in[1],
+                                         (rp_real)in[2], (rp_real)in[3]);
+        cam.k1 = (rp_real)dist[0];
+        cam.k2 = (rp_real)dist[1];
+        cam.p1 = (rp_real)dist[2];
+        cam.p2 = (rp_real)dist[3];
+        cam.k3 = (rp_real)dist[4];
+        char why[160];
+        if (distortion_unusable(&cam, why, sizeof why)) {
+            key_path(kp, path, "distortion");
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "distortion"), kp, "%s", why);
         }
     }
     for (int k = 0; k < 3; ++k) {
@@ -641,6 +795,7 @@ static const est_key_t est_keys[] = {
     {"gate_chi2", K_REAL, -1e6, 1e6, 0, ALL3(ekf.gate_chi2)},
     {"iterations", K_U8, 1, 20, 0, ALL3(ekf.iterations)},
     {"min_features", K_U16, 3, RP_MAX_FEATS_PER_CAM, 0, ALL3(ekf.min_features)},
+    {"max_predict_s", K_REAL, 0.0, 1e6, 1, ALL3(ekf.max_predict_s)},
     {"min_tracked", K_U16, 6, RP_MAX_FEATS_PER_CAM, 0, ALL3(min_tracked)},
     {"default_dt_s", K_REAL, 0.0, 10.0, 1, ALL3(default_dt_s)},
     {"max_epipolar_px", K_REAL, 0.0, 100.0, 1, 1, {F(stereo.max_epipolar_px)}},
@@ -697,7 +852,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         "max_epipolar_px", "min_depth_m", "max_depth_m", "max_reproj_px",   "refine_structure",
         "ransac",      "one_point",    "quarantine",
         "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s",
-        "metric_scale_sigma", NULL};
+        "metric_scale_sigma", "max_predict_s", NULL};
     const char *P = "estimator";
     yaml_node_t *m;
     char method[16];
@@ -938,24 +1093,83 @@ static rp_cfg_status_t parse_doc(ctx_t *c, rp_config_t *cfg)
     return RP_CFG_OK;
 }
 
-static rp_cfg_status_t parse_with(yaml_parser_t *parser, const char *name, rp_config_t *cfg,
-                                  char *err, size_t err_len)
+static rp_cfg_status_t yaml_error(const yaml_parser_t *parser, const char *text, size_t len,
+                                  const char *name, char *err, size_t err_len)
 {
-    yaml_document_t doc;
-    ctx_t c = {name, &doc, err, err_len, RP_CFG_OK};
-    memset(cfg, 0, sizeof *cfg);
-    snprintf(cfg->path, sizeof cfg->path, "%s", name);
-    if (!yaml_parser_load(parser, &doc)) {
-        if (err != NULL && err_len > 0) {
-            snprintf(err, err_len, "%s:%lu: (yaml): %s%s%s", name,
-                     (unsigned long)parser->problem_mark.line + 1u,
-                     parser->problem ? parser->problem : "syntax error",
-                     parser->context ? " " : "", parser->context ? parser->context : "");
+    if (parser->error == YAML_READER_ERROR) { /* bad encoding: libyaml gives a byte offset */
+        const size_t at = parser->problem_offset < len ? parser->problem_offset : len;
+        unsigned long line = 1;
+        for (size_t i = 0; i < at; ++i) {
+            line += text[i] == '\n';
         }
+        set_err(err, err_len, "%s:%lu: (yaml): %s at byte %zu", name, line,
+                parser->problem ? parser->problem : "unreadable text", at);
         return RP_CFG_E_SYNTAX;
     }
-    const rp_cfg_status_t st = parse_doc(&c, cfg);
-    yaml_document_delete(&doc);
+    set_err(err, err_len, "%s:%lu: (yaml): %s%s%s", name,
+            (unsigned long)parser->problem_mark.line + 1u,
+            parser->problem ? parser->problem : "syntax error", parser->context ? " " : "",
+            parser->context ? parser->context : "");
+    return RP_CFG_E_SYNTAX;
+}
+
+/* The first pass, over libyaml's events only (no document built, so it stops early and cheap):
+ * nesting at most RP_CFG_MAX_DEPTH, at most RP_CFG_MAX_NODES nodes, one document. */
+static rp_cfg_status_t check_stream(const char *text, size_t len, const char *name, char *err,
+                                    size_t err_len)
+{
+    yaml_parser_t parser;
+    if (!yaml_parser_initialize(&parser)) {
+        return RP_CFG_E_ARG;
+    }
+    yaml_parser_set_input_string(&parser, (const unsigned char *)text, len);
+    rp_cfg_status_t st = RP_CFG_OK;
+    int depth = 0, docs = 0, done = 0;
+    long nodes = 0;
+    while (!done && st == RP_CFG_OK) {
+        yaml_event_t e;
+        if (!yaml_parser_parse(&parser, &e)) {
+            st = yaml_error(&parser, text, len, name, err, err_len);
+            break;
+        }
+        const unsigned long line = (unsigned long)e.start_mark.line + 1u;
+        switch (e.type) {
+        case YAML_SEQUENCE_START_EVENT:
+        case YAML_MAPPING_START_EVENT:
+            if (++depth > RP_CFG_MAX_DEPTH) {
+                set_err(err, err_len, "%s:%lu: (yaml): nested deeper than %d levels", name, line,
+                        RP_CFG_MAX_DEPTH);
+                st = RP_CFG_E_SYNTAX;
+            }
+            break;
+        case YAML_SEQUENCE_END_EVENT:
+        case YAML_MAPPING_END_EVENT: --depth; break;
+        default: break;
+        }
+        switch (e.type) {
+        case YAML_SCALAR_EVENT:
+        case YAML_ALIAS_EVENT:
+        case YAML_SEQUENCE_START_EVENT:
+        case YAML_MAPPING_START_EVENT:
+            if (st == RP_CFG_OK && ++nodes > RP_CFG_MAX_NODES) {
+                set_err(err, err_len, "%s:%lu: (yaml): more than %d nodes", name, line,
+                        RP_CFG_MAX_NODES);
+                st = RP_CFG_E_SYNTAX;
+            }
+            break;
+        case YAML_DOCUMENT_START_EVENT:
+            if (++docs > 1) {
+                set_err(err, err_len, "%s:%lu: (yaml): a second document; a configuration is "
+                        "one document", name, line);
+                st = RP_CFG_E_SYNTAX;
+            }
+            break;
+        case YAML_STREAM_END_EVENT: done = 1; break;
+        default: break;
+        }
+        yaml_event_delete(&e);
+    }
+    yaml_parser_delete(&parser);
     return st;
 }
 
@@ -968,13 +1182,30 @@ rp_cfg_status_t rp_config_parse(const char *text, size_t len, const char *name, 
     if (text == NULL || cfg == NULL) {
         return RP_CFG_E_ARG;
     }
+    name = name != NULL ? name : "(string)";
+    memset(cfg, 0, sizeof *cfg);
+    snprintf(cfg->path, sizeof cfg->path, "%s", name);
+    if (len > RP_CFG_MAX_BYTES) {
+        set_err(err, err_len, "%s:0: (file): larger than %d bytes", name, RP_CFG_MAX_BYTES);
+        return RP_CFG_E_SYNTAX;
+    }
+    rp_cfg_status_t st = check_stream(text, len, name, err, err_len);
+    if (st != RP_CFG_OK) {
+        return st;
+    }
     yaml_parser_t parser;
     if (!yaml_parser_initialize(&parser)) {
         return RP_CFG_E_ARG;
     }
     yaml_parser_set_input_string(&parser, (const unsigned char *)text, len);
-    const rp_cfg_status_t st = parse_with(&parser, name != NULL ? name : "(string)", cfg, err,
-                                          err_len);
+    yaml_document_t doc;
+    if (!yaml_parser_load(&parser, &doc)) {
+        st = yaml_error(&parser, text, len, name, err, err_len);
+    } else {
+        ctx_t c = {name, &doc, err, err_len, RP_CFG_OK};
+        st = parse_doc(&c, cfg);
+        yaml_document_delete(&doc);
+    }
     yaml_parser_delete(&parser);
     return st;
 }
@@ -989,19 +1220,34 @@ rp_cfg_status_t rp_config_load(const char *path, rp_config_t *cfg, char *err, si
     }
     FILE *f = fopen(path, "rb");
     if (f == NULL) {
-        if (err != NULL && err_len > 0) {
-            snprintf(err, err_len, "%s:0: (file): %s", path, strerror(errno));
-        }
+        set_err(err, err_len, "%s:0: (file): %s", path, strerror(errno));
         return RP_CFG_E_OPEN;
     }
-    yaml_parser_t parser;
-    if (!yaml_parser_initialize(&parser)) {
+    struct stat st_f;
+    if (fstat(fileno(f), &st_f) == 0 && S_ISDIR(st_f.st_mode)) {
         fclose(f);
-        return RP_CFG_E_ARG;
+        set_err(err, err_len, "%s:0: (file): is a directory", path);
+        return RP_CFG_E_OPEN;
     }
-    yaml_parser_set_input_file(&parser, f);
-    const rp_cfg_status_t st = parse_with(&parser, path, cfg, err, err_len);
-    yaml_parser_delete(&parser);
+    /* The whole file, at most RP_CFG_MAX_BYTES (one byte more tells a larger file; a pipe or
+     * device is read up to there, never without end). Not the per-frame path: heap is fine. */
+    char *text = malloc((size_t)RP_CFG_MAX_BYTES + 1u);
+    if (text == NULL) {
+        fclose(f);
+        set_err(err, err_len, "%s:0: (file): out of memory", path);
+        return RP_CFG_E_OPEN;
+    }
+    const size_t len = fread(text, 1, (size_t)RP_CFG_MAX_BYTES + 1u, f);
+    const int read_error = ferror(f);
+    const int e = errno;
     fclose(f);
+    rp_cfg_status_t st;
+    if (read_error) {
+        set_err(err, err_len, "%s:0: (file): %s", path, strerror(e));
+        st = RP_CFG_E_OPEN;
+    } else {
+        st = rp_config_parse(text, len, path, cfg, err, err_len);
+    }
+    free(text);
     return st;
 }

@@ -2,6 +2,7 @@
  * rp_hal_common.c - rp_hal_open's dispatch to the sources' tables, status strings, clock, sleep.
  */
 #include "rp_hal_priv.h"
+#include "rp_esc_priv.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -26,10 +27,12 @@ const char *rp_hal_status_str(rp_hal_status_t s)
 
 rp_hal_status_t rp_hal_fail(char *err, rp_hal_status_t st, const char *fmt, ...)
 {
+    char raw[RP_HAL_ERR_MAX];
     va_list ap;
     va_start(ap, fmt);
-    (void)vsnprintf(err, RP_HAL_ERR_MAX, fmt, ap);
+    (void)vsnprintf(raw, sizeof raw, fmt, ap); /* cut at RP_HAL_ERR_MAX - 1: a message is a line */
     va_end(ap);
+    rp_esc_text(err, RP_HAL_ERR_MAX, raw);
     return st;
 }
 

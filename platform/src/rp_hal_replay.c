@@ -1,12 +1,16 @@
 /*
  * rp_hal_replay.c - the HAL's replay source: recorded or rendered frame sets from a folder.
  *
- * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/research/realdata):
+ * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/research/realdata);
+ * cfg.replay_index is the folder (its frames.csv is read) or the index file itself, whatever
+ * its name (messages name the file read):
  *   frames.csv  header `utime_us,cam0,cam1,...`, then one row per frame set: the capture time in
  *               microseconds (strictly increasing) and each column's image, a path relative to
  *               the folder (or absolute). Camera i reads the column named cfg.cam[i].device, or
  *               with an empty device the i-th image column.
- *               Blank lines and lines starting with '#' are skipped.
+ *               Blank lines and lines starting with '#' are skipped, however long; any other
+ *               line longer than LINE_MAX_CHARS is refused (file:line) and the next grab goes on
+ *               after it.
  *   truth.csv   optional, header `utime_us,tx,ty,tz,alpha,beta,gamma`: the pose of cam1 in the
  *               world (as rp_estimate_t.p); a set gets the row with its exact utime, if any.
  *   images      8-bit grey PNG (libpng; colour or 16-bit PNGs are converted to 8-bit grey) or
@@ -15,27 +19,40 @@
  * Sets come as fast as they are asked for, or with cfg.realtime at their recorded spacing
  * (the first one at once; a gap longer than timeout_ms gives RP_HAL_E_TIMEOUT after timeout_ms
  * and the set comes at a later grab, so grab never blocks longer than timeout_ms). set.utime and each camera's utime are the recorded times; seq is the
- * row's index among the data rows. A failing row (missing or malformed image) returns its error,
- * naming file and line; the next grab goes on with the next row.
+ * row's index among the data rows. With cfg.partial_sets, a row whose image cannot be read for
+ * some cameras is delivered with those cameras MISSING (no image) and RP_HAL_OK, the reason
+ * (file:line, camera, file, why) left in the source's message; a row none of whose images can be
+ * read (any, without partial_sets), or a malformed row, returns its error naming file and line;
+ * the next grab goes on with the next row.
+ * Only regular files are read (frames.csv, truth.csv, images): a FIFO, device or directory
+ * listed as an image is refused without opening it for reading, so nothing blocks. utime_us
+ * must lie within +-2^61 (any two differ by less than INT64_MAX); the pacing arithmetic
+ * saturates.
  */
 #include "rp_hal_priv.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <png.h>
 
-#define LINE_MAX_CHARS (RP_MAX_CAMS * RP_HAL_PATH_MAX + 64)
+#define LINE_MAX_CHARS (RP_MAX_CAMS * RP_HAL_PATH_MAX + 64) /* 1600 with the defaults */
+/* Largest |utime_us| of a row: the difference of any two fits int64_t (the estimators take
+ * the time between sets as a difference of utimes). */
+#define RP_HAL_UTIME_MAX ((int64_t)1 << 61)
 
 typedef struct {
     uint8_t open, started;
     rp_hal_cfg_t cfg;
     char *err;
-    char dir[RP_HAL_PATH_MAX];   /* folder of frames.csv */
+    char dir[RP_HAL_PATH_MAX];   /* folder of the index (image paths are relative to it) */
+    char index[2 * RP_HAL_PATH_MAX]; /* the index: DIR/frames.csv, or the file given */
     FILE *frames, *truth;
     uint32_t line, tline;        /* lines read so far in frames.csv / truth.csv */
     uint32_t row;                /* data rows read */
@@ -49,6 +66,7 @@ typedef struct {
     rp_real truth_p[6];
     rp_hal_set_t ready;          /* the next set, read but not delivered yet */
     uint8_t have_ready;
+    char ready_msg[RP_HAL_ERR_MAX]; /* why cameras of the ready set are missing ("" if none) */
     char buf[LINE_MAX_CHARS];
     char path[2 * RP_HAL_PATH_MAX];
     uint8_t n_cols;              /* image columns in frames.csv */
@@ -59,26 +77,121 @@ typedef struct {
 
 static replay_src_t g_replay;
 
-/* Next meaningful line of f into buf without its end of line. 1: a line, 0: end of file,
- * -1: a line longer than the buffer. */
+/* next_line's results besides 1 (a line) and 0 (end of file). */
+enum { LINE_TOO_LONG = -1, LINE_NUL = -2, LINE_IO = -3 };
+
+/* Next meaningful line of f into buf (cap bytes) without its end of line and trailing spaces.
+ * Blank lines and lines starting with '#' are skipped whatever their length. 1: a line,
+ * 0: end of file, LINE_TOO_LONG: a line of cap or more characters (read to its end, so the next
+ * call goes on after it), LINE_NUL: a NUL byte in the line, LINE_IO: a read error (errno).
+ * *line counts every line read. */
 static int next_line(FILE *f, char *buf, size_t cap, uint32_t *line)
 {
     for (;;) {
-        if (fgets(buf, (int)cap, f) == NULL) {
-            return 0;
+        size_t n = 0;
+        int c, first = EOF, too_long = 0, nul = 0;
+        while ((c = getc(f)) != EOF && c != '\n') {
+            if (first == EOF) {
+                first = c;
+            }
+            if (first == '#') {
+                continue; /* a comment: skipped however long */
+            }
+            nul |= c == '\0';
+            if (n + 1 < cap) {
+                buf[n++] = (char)c;
+            } else {
+                too_long = 1;
+            }
+        }
+        if (c == EOF && first == EOF) {
+            return ferror(f) ? LINE_IO : 0;
         }
         (*line)++;
-        size_t n = strlen(buf);
-        if (n == cap - 1 && buf[n - 1] != '\n' && !feof(f)) {
-            return -1;
+        buf[n] = '\0';
+        if (too_long) {
+            return LINE_TOO_LONG;
         }
-        while (n > 0 && (buf[n - 1] == '\n' || buf[n - 1] == '\r' || buf[n - 1] == ' ')) {
+        if (nul) {
+            return LINE_NUL;
+        }
+        while (n > 0 && (buf[n - 1] == '\r' || buf[n - 1] == ' ')) {
             buf[--n] = '\0';
         }
-        if (n > 0 && buf[0] != '#') {
+        if (n > 0 && first != '#') {
             return 1;
         }
     }
+}
+
+/* Why next_line gave r < 1, for a message. */
+static const char *line_why(int r)
+{
+    switch (r) {
+    case LINE_TOO_LONG: {
+        static char b[64];
+        (void)snprintf(b, sizeof b, "line longer than %d characters", LINE_MAX_CHARS - 1);
+        return b;
+    }
+    case LINE_NUL: return "NUL byte in the line";
+    case LINE_IO: return strerror(errno);
+    default: return "no line";
+    }
+}
+
+/* Opens path for reading only if it is a regular file: stat first (a FIFO or device is never
+ * opened), then open without blocking and check the opened file again (it may have been
+ * replaced in between). NULL with *why set on failure. */
+static FILE *open_regular(const char *path, const char **why)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        *why = strerror(errno);
+        return NULL;
+    }
+    const int fd = S_ISREG(st.st_mode) ? open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY) : -1;
+    if (fd < 0 && S_ISREG(st.st_mode)) {
+        *why = strerror(errno);
+        return NULL;
+    }
+    if (fd >= 0 && (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))) {
+        close(fd);
+    } else if (fd >= 0) {
+        FILE *f = fdopen(fd, "rb");
+        if (f == NULL) {
+            *why = strerror(errno);
+            close(fd);
+        }
+        return f;
+    }
+    *why = S_ISDIR(st.st_mode) ? "is a directory, not a file"
+           : S_ISFIFO(st.st_mode) ? "is a FIFO, not a regular file"
+           : (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) ? "is a device, not a regular file"
+                                                          : "not a regular file";
+    return NULL;
+}
+
+/* a + b and a - b, saturating at the ends of int64_t. */
+static int64_t sat_add(int64_t a, int64_t b)
+{
+    if (b > 0 && a > INT64_MAX - b) {
+        return INT64_MAX;
+    }
+    if (b < 0 && a < INT64_MIN - b) {
+        return INT64_MIN;
+    }
+    return a + b;
+}
+
+static int64_t sat_sub(int64_t a, int64_t b)
+{
+    if (b < 0 && a > INT64_MAX + b) {
+        return INT64_MAX;
+    }
+    if (b > 0 && a < INT64_MIN + b) {
+        return INT64_MIN;
+    }
+    return a - b;
 }
 
 /* Splits buf at commas in place (spaces around fields trimmed). Returns the field count, or
@@ -184,12 +297,12 @@ static const char *read_pgm(FILE *f, uint8_t *dst, uint16_t *w, uint16_t *h)
     return NULL;
 }
 
-static const char *read_png(const char *path, uint8_t *dst, uint16_t *w, uint16_t *h)
+static const char *read_png(FILE *f, uint8_t *dst, uint16_t *w, uint16_t *h)
 {
     png_image im;
     memset(&im, 0, sizeof im);
     im.version = PNG_IMAGE_VERSION;
-    if (!png_image_begin_read_from_file(&im, path)) {
+    if (!png_image_begin_read_from_stdio(&im, f)) {
         return "malformed PNG";
     }
     if (im.width == 0 || im.height == 0 || im.width > RP_HAL_MAX_W ||
@@ -207,39 +320,41 @@ static const char *read_png(const char *path, uint8_t *dst, uint16_t *w, uint16_
     return NULL;
 }
 
-/* One image (PNG or PGM, told apart by their first bytes) into the camera's buffer. */
+/* One image (PNG or PGM, told apart by their first bytes) into the camera's buffer. Messages
+ * name frames.csv's line, the camera, the file and what is wrong. */
 static rp_hal_status_t load_image(replay_src_t *s, uint8_t cam, const char *rel)
 {
     const int n = rel[0] == '/' ? snprintf(s->path, sizeof s->path, "%s", rel)
                                 : snprintf(s->path, sizeof s->path, "%s/%s", s->dir, rel);
     if (n < 0 || (size_t)n >= sizeof s->path || rel[0] == '\0') {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: camera %u: bad path",
-                           s->dir, (unsigned)s->line, (unsigned)cam);
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: camera %u: %s path",
+                           s->index, (unsigned)s->line, (unsigned)cam,
+                           rel[0] == '\0' ? "empty" : "too long a");
     }
-    FILE *f = fopen(s->path, "rb");
+    const char *why = NULL;
+    FILE *f = open_regular(s->path, &why);
     if (f == NULL) {
-        return rp_hal_fail(s->err, RP_HAL_E_OPEN, "%s/frames.csv:%u: %s: %s", s->dir,
-                           (unsigned)s->line, s->path, strerror(errno));
+        return rp_hal_fail(s->err, RP_HAL_E_OPEN, "%s:%u: camera %u: %s: %s", s->index,
+                           (unsigned)s->line, (unsigned)cam, s->path, why);
     }
     unsigned char magic[4] = {0, 0, 0, 0};
     const size_t got = fread(magic, 1, 4, f);
-    const char *why;
+    rewind(f);
     if (got == 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') {
-        fclose(f);
-        why = read_png(s->path, s->grey[cam], &s->w[cam], &s->h[cam]);
+        why = read_png(f, s->grey[cam], &s->w[cam], &s->h[cam]);
     } else {
-        rewind(f);
         why = read_pgm(f, s->grey[cam], &s->w[cam], &s->h[cam]);
-        fclose(f);
     }
+    fclose(f);
     if (why != NULL) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: %s: %s", s->dir,
-                           (unsigned)s->line, s->path, why);
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: camera %u: %s: %s", s->index,
+                           (unsigned)s->line, (unsigned)cam, s->path, why);
     }
     const rp_hal_cam_cfg_t *cc = &s->cfg.cam[cam];
     if (cc->w != 0 && (s->w[cam] != cc->w || s->h[cam] != cc->h)) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/frames.csv:%u: %s: %ux%u, configured %ux%u",
-                           s->dir, (unsigned)s->line, s->path, (unsigned)s->w[cam],
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                           "%s:%u: camera %u: %s: %ux%u, configured %ux%u", s->index,
+                           (unsigned)s->line, (unsigned)cam, s->path, (unsigned)s->w[cam],
                            (unsigned)s->h[cam], (unsigned)cc->w, (unsigned)cc->h);
     }
     return RP_HAL_OK;
@@ -273,7 +388,8 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
     s->err = err;
     char csv[2 * RP_HAL_PATH_MAX];
     struct stat st;
-    if (stat(idx, &st) == 0 && S_ISDIR(st.st_mode)) {
+    const int is_dir = stat(idx, &st) == 0 && S_ISDIR(st.st_mode);
+    if (is_dir) {
         (void)snprintf(s->dir, sizeof s->dir, "%s", idx);
     } else {
         const char *slash = strrchr(idx, '/');
@@ -287,15 +403,28 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
     while (dl > 1 && s->dir[dl - 1] == '/') {
         s->dir[--dl] = '\0';
     }
-    (void)snprintf(csv, sizeof csv, "%s/frames.csv", s->dir);
-    s->frames = fopen(csv, "r");
+    if (is_dir) {
+        (void)snprintf(s->index, sizeof s->index, "%s/frames.csv", s->dir);
+    } else { /* the file given, whatever its name (a renamed index is not silently replaced) */
+        (void)snprintf(s->index, sizeof s->index, "%s", idx);
+    }
+    (void)snprintf(csv, sizeof csv, "%s", s->index);
+    const char *why = NULL;
+    s->frames = open_regular(csv, &why);
     if (s->frames == NULL) {
-        return rp_hal_fail(err, RP_HAL_E_OPEN, "%s: %s", csv, strerror(errno));
+        return rp_hal_fail(err, RP_HAL_E_OPEN, "%s: %s%s%s%s", csv, why,
+                           is_dir ? " (replay_index " : "", is_dir ? idx : "",
+                           is_dir ? " is a folder: its frames.csv is read)" : "");
     }
     char *f[RP_MAX_CAMS + 2];
     const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
     const unsigned k = r > 0 ? split(s->buf, f, RP_MAX_CAMS + 1) : 0;
-    if (r <= 0 || k < 2 || strcmp(f[0], "utime_us") != 0) {
+    if (r < 0) {
+        replay_close(s);
+        return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: %s", csv, (unsigned)s->line,
+                           line_why(r));
+    }
+    if (r == 0 || k < 2 || strcmp(f[0], "utime_us") != 0) {
         replay_close(s);
         return rp_hal_fail(err, RP_HAL_E_FORMAT,
                            "%s:%u: header must be utime_us,cam0,cam1,...", csv,
@@ -331,7 +460,14 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
         s->col[i] = (uint8_t)c;
     }
     (void)snprintf(csv, sizeof csv, "%s/truth.csv", s->dir);
-    s->truth = fopen(csv, "r");
+    struct stat tst;
+    if (stat(csv, &tst) == 0 || errno != ENOENT) { /* truth.csv is optional */
+        s->truth = open_regular(csv, &why);
+        if (s->truth == NULL) {
+            replay_close(s);
+            return rp_hal_fail(err, RP_HAL_E_OPEN, "%s: %s", csv, why);
+        }
+    }
     if (s->truth != NULL) {
         static const char *const want[7] = {"utime_us", "tx", "ty", "tz", "alpha", "beta",
                                             "gamma"};
@@ -404,30 +540,57 @@ static rp_hal_status_t read_row(replay_src_t *s)
     const uint8_t n = s->cfg.n_cams;
     const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
     if (r == 0) {
-        return rp_hal_fail(s->err, RP_HAL_E_END, "%s/frames.csv: end after %u sets", s->dir,
+        return rp_hal_fail(s->err, RP_HAL_E_END, "%s: end after %u sets", s->index,
                            (unsigned)s->row);
     }
+    if (r < 0) {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: %s", s->index,
+                           (unsigned)s->line, line_why(r));
+    }
     char *f[RP_MAX_CAMS + 2];
-    const unsigned k = r > 0 ? split(s->buf, f, RP_MAX_CAMS + 1) : 0;
+    const unsigned k = split(s->buf, f, RP_MAX_CAMS + 1);
     int64_t u = 0;
-    if (r < 0 || k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
+    if (k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s/frames.csv:%u: want utime_us and %u image paths", s->dir,
+                           "%s:%u: want utime_us and %u image paths", s->index,
                            (unsigned)s->line, (unsigned)s->n_cols);
+    }
+    if (u < -RP_HAL_UTIME_MAX || u > RP_HAL_UTIME_MAX) {
+        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                           "%s:%u: utime_us %" PRId64 " outside +-2^61 us (73,000 "
+                           "years: beyond it the time between two sets overflows)",
+                           s->index, (unsigned)s->line, u);
     }
     if (s->any_row && u <= s->last_u) {
         return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s/frames.csv:%u: utime_us %" PRId64 " not after %" PRId64, s->dir,
+                           "%s:%u: utime_us %" PRId64 " not after %" PRId64, s->index,
                            (unsigned)s->line, u, s->last_u);
     }
     s->any_row = 1;
     s->last_u = u;
     const uint32_t row = s->row++;
+    /* Each camera's image; one that cannot be read leaves its camera MISSING in this set. */
+    uint8_t ok[RP_MAX_CAMS];
+    unsigned n_bad = 0;
+    rp_hal_status_t first_bad = RP_HAL_OK;
+    s->ready_msg[0] = '\0';
     for (uint8_t i = 0; i < n; i++) {
         const rp_hal_status_t st = load_image(s, i, f[s->col[i] + 1]);
-        if (st != RP_HAL_OK) {
-            return st;
+        ok[i] = st == RP_HAL_OK;
+        if (st != RP_HAL_OK && n_bad++ == 0) {
+            first_bad = st;
+            memcpy(s->ready_msg, s->err, RP_HAL_ERR_MAX);
         }
+    }
+    if (n_bad == n || (n_bad > 0 && !s->cfg.partial_sets)) { /* the row fails (first reason) */
+        memcpy(s->err, s->ready_msg, RP_HAL_ERR_MAX);
+        s->ready_msg[0] = '\0';
+        return first_bad;
+    }
+    if (n_bad > 1) {
+        const size_t len = strlen(s->ready_msg);
+        (void)snprintf(s->ready_msg + len, RP_HAL_ERR_MAX - len, " (and %u more cameras)",
+                       n_bad - 1);
     }
     const int tr = truth_at(s, u);
     if (tr < 0) {
@@ -437,6 +600,9 @@ static rp_hal_status_t read_row(replay_src_t *s)
     rp_hal_set_t *set = &s->ready;
     rp_hal_set_clear(set, n);
     for (uint8_t i = 0; i < n; i++) {
+        if (!ok[i]) {
+            continue; /* MISSING, no image (rp_hal_set_clear) */
+        }
         rp_hal_frame_t *fr = &set->cam[i];
         fr->img.data = s->grey[i];
         fr->img.w = s->w[i];
@@ -476,7 +642,7 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
             s->clock0 = rp_hal_now_us();
             s->paced = 1;
         }
-        const int64_t wait = s->clock0 + (u - s->u0) - rp_hal_now_us();
+        const int64_t wait = sat_sub(sat_add(s->clock0, sat_sub(u, s->u0)), rp_hal_now_us());
         const int64_t limit = (int64_t)s->cfg.timeout_ms * 1000;
         if (s->cfg.timeout_ms > 0 && wait > limit) { /* a gap in the recording: keep the set */
             rp_hal_sleep_us(limit);
@@ -489,6 +655,9 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
     *set = s->ready;
     set->seq = s->set_seq++;
     s->have_ready = 0;
+    if (s->ready_msg[0] != '\0') { /* cameras missing from this set: say why */
+        memcpy(s->err, s->ready_msg, RP_HAL_ERR_MAX);
+    }
     return RP_HAL_OK;
 }
 

@@ -544,8 +544,8 @@ static int cam_read(v4l2_cam_t *c)
 
 static void cam_lost(v4l2_src_t *s, v4l2_cam_t *c, const char *why, int64_t now)
 {
-    (void)rp_hal_fail(s->err, RP_HAL_OK, "%s: %s; reopening every %u ms", c->cfg->device, why,
-                      (unsigned)s->cfg.retry_ms);
+    (void)rp_hal_fail(s->err, RP_HAL_OK, "camera %u: %s: %s; reopening every %u ms",
+                      (unsigned)(c - s->cam), c->cfg->device, why, (unsigned)s->cfg.retry_ms);
     cam_close(c);
     c->gone = 1;
     c->rejoining = 0;

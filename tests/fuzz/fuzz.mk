@@ -1,6 +1,7 @@
 # tests/fuzz/fuzz.mk - libFuzzer targets of whatever parses outside input (included by the
 # top-level Makefile, last: it uses the HAL's and lcm_types' variables). tests/fuzz/README.md.
 #
+#   make fuzz FUZZ_BUDGET_S=N  the same with N seconds shared out evenly (at least 5 s a target)
 #   make fuzz FUZZ_S=N         every target for N seconds (default 60), one after the other, on its
 #                              growing corpus $(BUILD)/fuzz/corpus/<target> and the seeds; prints
 #                              executions and corpus size per target; a crash, sanitizer report,
@@ -27,6 +28,9 @@ FUZZ_LCM_TYPES := $(patsubst lcm_types/%.lcm,%,$(LCM_DEFS))
 FUZZ_TARGETS := config replay_index image mjpeg lcmlog $(addprefix lcm_,$(FUZZ_LCM_TYPES))
 FUZZ_BINS := $(addprefix $(FUZZ)/fuzz_,$(FUZZ_TARGETS))
 FUZZ_TESTS := $(addprefix $(FUZZ)/test_,$(FUZZ_TARGETS))
+ifneq ($(FUZZ_BUDGET_S),)
+override FUZZ_S := $(shell n=$$(( $(FUZZ_BUDGET_S) / $(words $(FUZZ_TARGETS)) )); echo $$(( n < 5 ? 5 : n )))
+endif
 
 # The HAL, instrumented (every source: rp_hal_common.c dispatches to all three).
 FUZZ_HAL_OBJ := $(patsubst platform/src/%.c,$(FUZZ)/hal/%.o,$(HAL_C))

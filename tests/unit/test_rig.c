@@ -17,7 +17,7 @@ static void ry(double b, rp_real R[9])
     rp_rot_from_angles(abg, R);
 }
 
-/* The paper's six cameras (DESIGN.md): cam1, cam2 (+x side), cam3 (back), cam4 (-x side),
+/* The paper's six cameras (docs/design.md): cam1, cam2 (+x side), cam3 (back), cam4 (-x side),
  * cam1's and cam3's stereo partners. 640x480, f = 800 px; cam2 and cam1b carry EuRoC's
  * distortion so that the distortion Jacobian is part of the chain. */
 static void make_rig(rp_rig_t *rig)

@@ -1,5 +1,5 @@
 /*
- * test_sim.c - the simulator follows the paper's protocol (DESIGN.md, Table 1) exactly, and is
+ * test_sim.c - the simulator follows the paper's protocol (docs/design.md, Table 1) exactly, and is
  * a deterministic function of (seed, run, frame). The layout study's placements: files parse,
  * malformed lines are reported with their line, the ranking is sorted, and the paper's placement
  * reproduces the plain gc figures while another placement changes them.

@@ -267,7 +267,7 @@ static void test_all_lost_redetects_new_ids(void **s)
     assert_true(info.flags & RP_TRACK_TOPPED_UP);
     for (int i = info.n_tracked; i < n1; ++i) {
         assert_true(f1[i].id > max0);
-        assert_int_equal(f1[i].id % RP_MAX_CAMS, 0);
+        assert_int_equal(rp_track_id_cam(f1[i].id), 0);
     }
     /* all lost for sure: a frame of a third, unrelated scene far off */
     render(&t, 0, 0, img0);
@@ -613,8 +613,8 @@ static void test_feeding_a_tracker(void **s)
     const rp_pyr_t *pyr = NULL;
     assert_ok(rp_track_current_pyr(&fed, &pyr));
     assert_non_null(pyr);
-    const rp_feat_t a = {0 + RP_MAX_CAMS * 5, {(rp_real)10.25, (rp_real)20.5}}; /* camera 0's */
-    const rp_feat_t b = {2 + RP_MAX_CAMS * 7, {(rp_real)30.0, (rp_real)40.0}};  /* camera 2's */
+    const rp_feat_t a = {rp_track_id(0, 5), {(rp_real)10.25, (rp_real)20.5}}; /* camera 0's */
+    const rp_feat_t b = {rp_track_id(2, 7), {(rp_real)30.0, (rp_real)40.0}};  /* camera 2's */
     rp_feat_t bad = a;
     bad.uv[0] = (rp_real)NAN;
     assert_ok(rp_track_adopt(&fed, &a));
@@ -635,8 +635,8 @@ static void test_feeding_a_tracker(void **s)
     assert_int_equal(n, 1);
     assert_int_equal(out[0].id, a.id);
     /* drop_ids: the listed ids go, the others keep their order; an id not held changes nothing */
-    const rp_feat_t c = {0 + RP_MAX_CAMS * 6, {(rp_real)50.0, (rp_real)60.0}};
-    const rp_feat_t d = {0 + RP_MAX_CAMS * 8, {(rp_real)70.0, (rp_real)80.0}};
+    const rp_feat_t c = {rp_track_id(0, 6), {(rp_real)50.0, (rp_real)60.0}};
+    const rp_feat_t d = {rp_track_id(0, 8), {(rp_real)70.0, (rp_real)80.0}};
     assert_ok(rp_track_adopt(&fed, &c));
     assert_ok(rp_track_adopt(&fed, &d));
     const uint32_t gone[2] = {c.id, b.id}; /* b is no longer held */
@@ -655,7 +655,7 @@ static void test_feeding_a_tracker(void **s)
     /* full: RP_MAX_FEATS_PER_CAM tracks, the next is refused */
     for (uint32_t i = 1; i < RP_MAX_FEATS_PER_CAM; ++i) {
         rp_feat_t f = a;
-        f.id = a.id + RP_MAX_CAMS * i;
+        f.id = rp_track_id(0, 5 + i);
         assert_ok(rp_track_adopt(&fed, &f));
     }
     assert_status(rp_track_adopt(&fed, &b), RP_E_FULL);

@@ -361,6 +361,11 @@ static void layouts_hold_through_the_turn(void **state)
                         continue;
                     }
                     lost += st != RP_OK;
+                    /* published angles wrapped: alpha, gamma in [-pi, pi], beta in
+                     * [-pi/2, pi/2] */
+                    assert_true(fabs((double)est.p[3]) <= PI + 1e-6 &&
+                                fabs((double)est.p[4]) <= PI / 2.0 + 1e-6 &&
+                                fabs((double)est.p[5]) <= PI + 1e-6);
                     const double e = rot_error(&sr.truth_R[9u * j], est.p);
                     sum += e;
                     if (e > worst) {

@@ -8,6 +8,7 @@
 #include "rp_test.h"
 #include "rigpose/rp_vo.h"
 #include "rigpose/rp_rot.h"
+#include "priv/rp_math.h"
 
 static rp_frameset_t fs;
 
@@ -99,7 +100,22 @@ static void test_fill_estimate_scales_translations(void **state)
     assert_true(est.utime == 123 && est.frame == 4 && est.flags == RP_EST_TRACKING);
     assert_int_equal(est.n_landmarks, 9);
     assert_int_equal(est.n_gated, 7);
-    assert_true(est.p[0] == RP_C(0.5) && est.p[3] == RP_C(4.0)); /* angles not scaled */
+    assert_true(est.p[0] == RP_C(0.5)); /* angles not scaled, but wrapped: */
+    /* (4, 5, 6) rad is outside alpha, gamma in [-pi, pi], beta in [-pi/2, pi/2]: the same
+     * rotation's canonical triple is published */
+    rp_real Ra[9], Rb[9];
+    rp_rot_from_angles(ekf.x + 3, Ra);
+    rp_rot_from_angles(est.p + 3, Rb);
+    for (int i = 0; i < 9; ++i) {
+        assert_true(rp_fabs(Ra[i] - Rb[i]) < RP_C(1e-5));
+    }
+    assert_true(rp_fabs(est.p[3]) <= RP_PI && rp_fabs(est.p[4]) <= RP_PI / RP_C(2.0) &&
+                rp_fabs(est.p[5]) <= RP_PI);
+    ekf.x[3] = RP_C(0.25);
+    ekf.x[4] = RP_C(-1.5);
+    ekf.x[5] = RP_C(3.0);
+    assert_ok(rp_vo_fill_estimate(&ekf, RP_C(0.5), 123, 4, RP_EST_TRACKING, 9, &est));
+    assert_memory_equal(est.p + 3, ekf.x + 3, 3 * sizeof(rp_real)); /* in range: untouched */
     assert_true(est.v[0] == RP_C(3.5) && est.v[5] == RP_C(12.0));
     assert_true(est.cov[0] == RP_C(0.25));                       /* t t: scale^2 */
     assert_true(est.cov[3] == RP_C(0.25));                       /* t angle: scale */

@@ -49,6 +49,9 @@ typedef struct {
                         * <= 0 disables gating */
     uint8_t iterations;/* Gauss-Newton iterations of the update, >= 1 (1 = plain EKF) */
     uint16_t min_features; /* fewer accepted features than this: no update (RP_E_TOO_FEW) */
+    rp_real max_predict_s; /* the constant-velocity prediction runs at most this long without
+                            * a successful update (s, > 0); after it the pose is held (see
+                            * rp_ekf_predict) */
 } rp_ekf_params_t;
 
 /* Defaults for 0.5 px noise and a hand-held / robot motion at ~30 Hz. */
@@ -58,6 +61,10 @@ typedef struct {
     rp_real x[RP_EKF_N];            /* state */
     rp_real P[RP_EKF_N * RP_EKF_N]; /* covariance, row-major */
     rp_ekf_params_t prm;
+    rp_real t_unobs;                /* time predicted since the last successful update (or the
+                                     * start), s */
+    uint8_t held;                   /* 1 once t_unobs passed prm.max_predict_s: the pose is held
+                                     * (velocity mean zero) until the next successful update */
 } rp_ekf_t;
 
 typedef struct {
@@ -78,7 +85,14 @@ rp_status_t rp_ekf_init(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real
                         const rp_real P0diag[RP_EKF_N]);
 
 /* Time update over dt seconds (dt > 0, finite; else RP_E_ARG and no change; RP_E_NAN and no
- * change for a non-finite pose or rate). */
+ * change for a non-finite pose or rate).
+ * Bounded prediction: the constant-velocity model extrapolates for at most prm.max_predict_s
+ * after the last successful update. At that time the velocity is released: its mean becomes
+ * zero and its covariance Pvv + v v^T (the second moment of the true rate about zero, so the
+ * error the held pose makes if the rig kept moving is in the covariance), and the prediction
+ * goes on from there: the pose stays where it was while its covariance keeps growing, by the
+ * plant noise and by dt^2 times the released rate covariance. ekf->held says so; a successful
+ * update clears it (and t_unobs). */
 rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt);
 
 /* r^T S^-1 r with S = J C J^T + s2 I: the 2-dof Mahalanobis distance of a residual r whose

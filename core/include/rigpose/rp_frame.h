@@ -36,7 +36,10 @@ enum {
     RP_EST_LOST         = 1u << 4, /* no update possible: pose is the prediction only */
     RP_EST_GATED        = 1u << 5, /* some measurements rejected as outliers (Mahalanobis gate) */
     RP_EST_COV_RESET    = 1u << 6, /* numerical fault: the covariance was reset */
-    RP_EST_SCALE_WEAK   = 1u << 7  /* metric scale poorly determined (non-overlapping layouts) */
+    RP_EST_SCALE_WEAK   = 1u << 7, /* metric scale poorly determined (non-overlapping layouts) */
+    RP_EST_HELD         = 1u << 8  /* no update for longer than the filter's max_predict_s: the
+                                    * pose is held, not extrapolated, its covariance growing
+                                    * (rp_ekf_predict); always with LOST */
 };
 
 typedef struct {

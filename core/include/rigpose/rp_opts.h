@@ -96,7 +96,7 @@ typedef double rp_real;
 #define RP_STATIC_ASSERT(cond, msg) _Static_assert(cond, msg)
 #endif
 
-RP_STATIC_ASSERT(RP_MAX_CAMS >= 1 && RP_MAX_CAMS <= 16, "RP_MAX_CAMS out of range");
+RP_STATIC_ASSERT(RP_MAX_CAMS >= 1 && RP_MAX_CAMS <= 15, "RP_MAX_CAMS out of range (track ids: rp_track.h)");
 RP_STATIC_ASSERT(RP_MAX_PAIRS * 2 <= RP_MAX_CAMS, "each stereo pair needs two cameras");
 RP_STATIC_ASSERT(RP_MAX_FEATS_PER_CAM >= 8 && RP_MAX_FEATS_PER_CAM <= 65535, "feature limit");
 RP_STATIC_ASSERT(RP_MAX_LANDMARKS >= RP_MAX_FEATS_PER_CAM, "landmark table smaller than a camera");

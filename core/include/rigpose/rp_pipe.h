@@ -139,6 +139,12 @@ typedef struct {
     } est;
     rp_frameset_t fs;                         /* the last frame set of features */
     rp_estimate_t last;                       /* the last estimate */
+    rp_real held_cov[36];                     /* pose covariance published while last held */
+    rp_real anchor_cov[36];                   /* added to every published covariance: the
+                                               * uncertainty of the structure rebuilt after
+                                               * holds (rp_pipe.c, finish) */
+    uint8_t was_held;                         /* the last held estimate is not yet followed by
+                                               * an update */
     rp_pipe_info_t info;
     int64_t last_utime;
     rp_feat_t scratch_a[RP_MAX_FEATS_PER_CAM]; /* new left features to match */
@@ -179,8 +185,11 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
  *   RP_E_TOO_FEW    the estimator could not update (too few features): est is its prediction
  *                   with RP_EST_LOST; the next frame set tries to re-initialise
  *   RP_E_DIVERGED   the estimator rejected its update and reset its covariance (prediction)
- *   RP_E_DEGENERATE no camera of the layout had a usable image: the estimator was not run,
- *                   est repeats the last estimate with RP_EST_LOST | RP_EST_DEGRADED
+ *   RP_E_DEGENERATE no camera of the layout had a usable image: the estimator ran on no
+ *                   features (its prediction to utime, RP_EST_LOST | RP_EST_DEGRADED)
+ * A LOST estimate never carries RP_EST_TRACKING and its n_used are 0; with no update for
+ * longer than the estimator's max_predict_s the pose is held (RP_EST_HELD, rp_ekf_predict);
+ * after a hold the published covariance keeps the held one (rp_pipe.c, finish).
  *   RP_E_RANGE      utime not after the previous frame set's: nothing done, est = last
  *                   estimate with RP_EST_LOST
  *   RP_E_ARG        NULL pipe, images or est, n > RP_MAX_CAMS, or pipe not initialised:

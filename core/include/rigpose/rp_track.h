@@ -37,7 +37,7 @@ extern "C" {
 
 
 typedef struct {
-    uint8_t cam;         /* camera index 0..RP_MAX_CAMS-1; ids are cam + RP_MAX_CAMS * k */
+    uint8_t cam;         /* camera index 0..RP_MAX_CAMS-1; ids: rp_track_id(cam, serial) */
     uint8_t levels;      /* pyramid levels incl. full resolution, 1..RP_TRACK_MAX_LEVELS (4) */
     uint8_t win;         /* LK window side, px, odd, 5..RP_TRACK_MAX_WIN (21) */
     uint8_t max_iter;    /* LK iterations per level (30) */
@@ -109,6 +109,32 @@ typedef struct {
     uint16_t x, y; /* pixel */
 } rp_track_cand_t;
 
+/* Track ids: the camera in the low RP_TRACK_CAM_BITS bits, a serial per camera above them,
+ * id = serial << 4 | cam. Camera 15 is never a tracker's (RP_MAX_CAMS <= 15), so RP_IDMAP_EMPTY
+ * (0xFFFFFFFF) is outside the id space. The serial counts modulo 2^28: after 268 M detections in
+ * one camera it wraps, and an id comes back only after every track born with it is long gone
+ * (a track lives for frames, not for 2^28 detections). Serials are compared wrap-safe
+ * (rp_track_serial_since), never with < or >=. */
+#define RP_TRACK_CAM_BITS 4u
+#define RP_TRACK_SERIAL_MASK (0xFFFFFFFFu >> RP_TRACK_CAM_BITS)
+RP_STATIC_ASSERT(RP_MAX_CAMS <= 15, "camera 15 is reserved: RP_IDMAP_EMPTY stays no id");
+
+static inline uint32_t rp_track_id(uint8_t cam, uint32_t serial)
+{
+    return ((serial & RP_TRACK_SERIAL_MASK) << RP_TRACK_CAM_BITS) | (uint32_t)cam;
+}
+static inline uint8_t rp_track_id_cam(uint32_t id)
+{
+    return (uint8_t)(id & ((1u << RP_TRACK_CAM_BITS) - 1u));
+}
+static inline uint32_t rp_track_id_serial(uint32_t id) { return id >> RP_TRACK_CAM_BITS; }
+/* 1 if serial s was issued at or after serial k, modulo 2^28: within half the serial space
+ * ahead of k (wrap-safe, as TCP sequence numbers are compared). */
+static inline int rp_track_serial_since(uint32_t s, uint32_t k)
+{
+    return ((s - k) & RP_TRACK_SERIAL_MASK) <= (RP_TRACK_SERIAL_MASK >> 1);
+}
+
 /* Per-camera tracker. Large (two pyramids, about 0.85 MB at 640x480): allocate it statically. */
 typedef struct {
     rp_track_cfg_t cfg;
@@ -116,7 +142,8 @@ typedef struct {
     uint8_t cur;      /* index of the pyramid holding the last accepted image */
     uint8_t has_prev; /* 1 once an image was accepted */
     int64_t utime;    /* time of the last accepted image, us */
-    uint32_t next_k;  /* next id is cfg.cam + RP_MAX_CAMS * next_k; never reused */
+    uint32_t next_k;  /* serial of the next new track (id rp_track_id(cfg.cam, next_k)); counts
+                       * modulo 2^28 (RP_TRACK_SERIAL_MASK) */
     uint16_t n;       /* current tracks */
     uint32_t id[RP_MAX_FEATS_PER_CAM];
     int32_t pos_q16[RP_MAX_FEATS_PER_CAM][2]; /* level-0 position, Q16 px */
@@ -159,8 +186,8 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
 /* ---- feeding a tracker: the second camera of a stereo pair (rp_pipe) runs a tracker that only
  * follows the features handed to it, matched from the pair's first camera. */
 
-/* Keeps only the tracks whose id comes from camera owner (id % RP_MAX_CAMS == owner, the id
- * scheme of rp_tracker_t.next_k), in their order; *n_kept (may be NULL) gets how many remain.
+/* Keeps only the tracks whose id comes from camera owner (rp_track_id_cam(id) == owner), in
+ * their order; *n_kept (may be NULL) gets how many remain.
  * RP_E_ARG (NULL trk, owner >= RP_MAX_CAMS). */
 rp_status_t rp_track_keep_owned(rp_tracker_t *trk, uint8_t owner, uint16_t *n_kept);
 
@@ -180,9 +207,13 @@ rp_status_t rp_track_adopt(rp_tracker_t *trk, const rp_feat_t *f);
 rp_status_t rp_track_features(const rp_tracker_t *trk, rp_feat_t *out, uint16_t cap,
                               uint16_t *n);
 
-/* *k: the serial of the next new track (its id is cfg.cam + RP_MAX_CAMS * serial), so a track
- * whose id / RP_MAX_CAMS >= *k was born after this call. RP_E_ARG (NULL). */
+/* *k: the serial of the next new track (its id is rp_track_id(cfg.cam, *k)), so a track whose
+ * rp_track_serial_since(rp_track_id_serial(id), *k) was born after this call. RP_E_ARG (NULL). */
 rp_status_t rp_track_next_serial(const rp_tracker_t *trk, uint32_t *k);
+
+/* Sets the serial of the next new track (a run resumed from a recording, and the tests that
+ * cross the serial's wrap). RP_E_ARG (NULL, k > RP_TRACK_SERIAL_MASK). */
+rp_status_t rp_track_set_next_serial(rp_tracker_t *trk, uint32_t k);
 
 /* *pyr: the pyramid of the last accepted image (for matching features into it; before the
  * first image it holds nothing). RP_E_ARG (NULL). */

@@ -94,7 +94,8 @@ rp_status_t rp_vo_frame_dt(const rp_frameset_t *fs, int64_t prev_utime, rp_real 
 
 /* est's pose, velocity and 6x6 pose covariance from the filter, translations (and their
  * velocities) times t_scale (1: the filter's unit is the metre; gc: 1 / its map unit), and
- * utime, frame, flags, n_landmarks as given. The other fields of est are left alone.
+ * utime, frame, flags, n_landmarks as given, except that LOST clears TRACKING and a held filter
+ * (rp_ekf_t.held) adds HELD | LOST. The other fields of est are left alone.
  * RP_E_ARG (NULL). */
 rp_status_t rp_vo_fill_estimate(const rp_ekf_t *ekf, rp_real t_scale, int64_t utime,
                                 uint32_t frame, uint32_t flags, uint16_t n_landmarks,

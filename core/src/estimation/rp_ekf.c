@@ -34,17 +34,18 @@ rp_ekf_params_t rp_ekf_default_params(void)
     p.gate_chi2 = RP_C(13.8);
     p.iterations = 3;
     p.min_features = 6;
+    p.max_predict_s = RP_C(1.0);
     return p;
 }
 
 static rp_status_t check_params(const rp_ekf_params_t *prm)
 {
     if (!rp_finite(prm->sigma_px) || !rp_finite(prm->q_trans) || !rp_finite(prm->q_rot) ||
-        !rp_finite(prm->gate_chi2)) {
+        !rp_finite(prm->gate_chi2) || !rp_finite(prm->max_predict_s)) {
         return RP_E_NAN;
     }
     if (prm->sigma_px <= RP_C(0.0) || prm->q_trans < RP_C(0.0) || prm->q_rot < RP_C(0.0) ||
-        prm->iterations == 0 || prm->min_features < 3) {
+        prm->iterations == 0 || prm->min_features < 3 || !(prm->max_predict_s > RP_C(0.0))) {
         return RP_E_ARG;
     }
     return RP_OK;
@@ -93,6 +94,8 @@ static void symmetrize(rp_real *P, int n)
     }
 }
 
+static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt);
+
 rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt)
 {
     if (!ekf) {
@@ -101,6 +104,41 @@ rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt)
     if (!rp_finite(dt) || dt <= RP_C(0.0)) {
         return RP_E_ARG;
     }
+    if (!rp_all_finite(ekf->x, N)) {
+        return RP_E_NAN;
+    }
+    /* a: the part of dt still within max_predict_s of the last update */
+    const rp_real left = ekf->prm.max_predict_s - ekf->t_unobs;
+    const rp_real a = ekf->held || !(left > RP_C(0.0)) ? RP_C(0.0) : left < dt ? left : dt;
+    rp_status_t st = RP_OK;
+    if (a > RP_C(0.0)) {
+        st = predict_cv(ekf, a);
+    }
+    if (st == RP_OK && a < dt) {
+        if (!ekf->held) {
+            /* release the rate: mean 0, covariance its second moment Pvv + v v^T */
+            rp_real *x = ekf->x, *P = ekf->P;
+            for (int i = 0; i < NP; ++i) {
+                for (int j = 0; j < NP; ++j) {
+                    P[(NP + i) * N + NP + j] += x[NP + i] * x[NP + j];
+                }
+            }
+            for (int i = 0; i < NP; ++i) {
+                x[NP + i] = RP_C(0.0);
+            }
+            ekf->held = 1;
+        }
+        st = predict_cv(ekf, dt - a);
+    }
+    if (st == RP_OK) {
+        ekf->t_unobs += dt;
+    }
+    return st;
+}
+
+/* The constant-velocity time update over dt > 0 (the plant of rp_ekf.h). */
+static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
+{
     rp_real *x = ekf->x;
     rp_real *P = ekf->P;
     /* Translation t+ = t + dt v; rotation R+ = Exp(dt omega) R (omega: world-frame angular
@@ -445,6 +483,8 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
     }
     memcpy(ekf->x, x_new, sizeof(x_new));
     memcpy(ekf->P, P_new, sizeof(P_new));
+    ekf->t_unobs = RP_C(0.0);
+    ekf->held = 0;
     info->n_used = n_used;
     info->n_gated = n_gated;
     info->n_bad = n_bad;

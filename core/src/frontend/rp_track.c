@@ -1004,7 +1004,8 @@ static int detect_pass(rp_tracker_t *trk, const uint8_t *scan, uint16_t *per_cel
         const uint16_t n = trk->n;
         trk->pos_q16[n][0] = kx;
         trk->pos_q16[n][1] = ky;
-        trk->id[n] = (uint32_t)cfg->cam + (uint32_t)RP_MAX_CAMS * trk->next_k++;
+        trk->id[n] = rp_track_id(cfg->cam, trk->next_k);
+        trk->next_k = (trk->next_k + 1u) & RP_TRACK_SERIAL_MASK;
         trk->n = (uint16_t)(n + 1);
         per_cell[c]++;
         ++added;

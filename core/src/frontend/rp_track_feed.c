@@ -15,7 +15,7 @@ rp_status_t rp_track_keep_owned(rp_tracker_t *trk, uint8_t owner, uint16_t *n_ke
     }
     uint16_t m = 0;
     for (uint16_t i = 0; i < trk->n; ++i) {
-        if (trk->id[i] % RP_MAX_CAMS == owner) {
+        if (rp_track_id_cam(trk->id[i]) == owner) {
             trk->id[m] = trk->id[i];
             trk->pos_q16[m][0] = trk->pos_q16[i][0];
             trk->pos_q16[m][1] = trk->pos_q16[i][1];
@@ -95,6 +95,15 @@ rp_status_t rp_track_next_serial(const rp_tracker_t *trk, uint32_t *k)
         return RP_E_ARG;
     }
     *k = trk->next_k;
+    return RP_OK;
+}
+
+rp_status_t rp_track_set_next_serial(rp_tracker_t *trk, uint32_t k)
+{
+    if (trk == NULL || k > RP_TRACK_SERIAL_MASK) {
+        return RP_E_ARG;
+    }
+    trk->next_k = k;
     return RP_OK;
 }
 

@@ -4,6 +4,8 @@
 #include <string.h>
 
 #include "rigpose/rp_vo.h"
+#include "priv/rp_math.h"
+#include "rigpose/rp_rot.h"
 
 rp_status_t rp_vo_ekf_idle(rp_ekf_t *ekf, const rp_ekf_params_t *prm)
 {
@@ -119,6 +121,20 @@ rp_status_t rp_vo_fill_estimate(const rp_ekf_t *ekf, rp_real t_scale, int64_t ut
             const rp_real sj = j < 3 ? t_scale : RP_C(1.0);
             est->cov[i * 6 + j] = si * sj * ekf->P[i * RP_EKF_N + j];
         }
+    }
+    /* published angles in their canonical ranges, alpha, gamma in [-pi, pi], beta in
+     * [-pi/2, pi/2] (the same rotation; the chart's covariance does not change) */
+    const rp_real *a = est->p + 3;
+    if (rp_fabs(a[0]) > RP_PI || rp_fabs(a[1]) > RP_PI / RP_C(2.0) || rp_fabs(a[2]) > RP_PI) {
+        rp_real R[9];
+        rp_rot_from_angles(a, R);
+        (void)rp_rot_to_angles(R, est->p + 3);
+    }
+    if (flags & RP_EST_LOST) {
+        flags &= ~(uint32_t)RP_EST_TRACKING; /* no update this frame: never both */
+    }
+    if (ekf->held) {
+        flags |= RP_EST_HELD | RP_EST_LOST;
     }
     est->flags = flags;
     est->n_landmarks = n_landmarks;

@@ -4,7 +4,7 @@
  *
  * Second cameras of stereo pairs run an rp_tracker_t that is fed, not detecting: after every
  * rp_track_process the pipeline keeps only the features it handed over (ids of the pair's first
- * camera, id % RP_MAX_CAMS == that camera, rp_track.h's id scheme) and appends each new match
+ * camera, rp_track_id_cam(id) == that camera, rp_track.h's id scheme) and appends each new match
  * to the tracker's list at its matched position (rp_track_keep_owned, rp_track_adopt,
  * rp_track_features).
  */
@@ -198,6 +198,9 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
     }
     memset(&pipe->fs, 0, sizeof(pipe->fs));
     memset(&pipe->last, 0, sizeof(pipe->last));
+    memset(pipe->held_cov, 0, sizeof(pipe->held_cov));
+    memset(pipe->anchor_cov, 0, sizeof(pipe->anchor_cov));
+    pipe->was_held = 0;
     memset(&pipe->info, 0, sizeof(pipe->info));
     pipe->last_utime = 0;
     pipe->magic = RP_PIPE_MAGIC;
@@ -228,7 +231,7 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     uint16_t n_new = 0;
     for (uint16_t i = 0; i < pipe->fs.n[sp->a]; ++i) {
         const rp_feat_t *f = &pipe->fs.f[sp->a][i];
-        if (f->id / RP_MAX_CAMS >= pipe->born_k[ta]) {
+        if (rp_track_serial_since(rp_track_id_serial(f->id), pipe->born_k[ta])) {
             pipe->scratch_a[n_new++] = *f;
         }
     }
@@ -349,6 +352,35 @@ static rp_status_t run_estimator(rp_pipe_t *pipe, rp_estimate_t *est)
     return rc_step(pipe, est);
 }
 
+/* What every step publishes, after the layout's estimator: a LOST estimate says TRACKING and
+ * its counts no more (the layout's own rule, kept here for every layout, rc's fusion too); and
+ * the covariance of a pose re-found after a blackout keeps the blackout's uncertainty. A held
+ * filter (RP_EST_HELD) rebuilds its structure at a pose it does not know, and later updates,
+ * which measure the rig against that structure, cannot tell where the structure is: so from
+ * the first update after a hold the held covariance (the last one published while held) is
+ * added to every published covariance, until the pipeline is set up again (a later hold adds
+ * its own). */
+static void finish(rp_pipe_t *pipe, rp_estimate_t *est)
+{
+    if (est->flags & RP_EST_LOST) {
+        est->flags &= ~(uint32_t)RP_EST_TRACKING;
+        memset(est->n_used, 0, sizeof(est->n_used));
+    }
+    if (est->flags & RP_EST_HELD) {
+        memcpy(pipe->held_cov, est->cov, sizeof(pipe->held_cov));
+        pipe->was_held = 1;
+    } else if (pipe->was_held && (est->flags & RP_EST_TRACKING)) {
+        for (int i = 0; i < 36; ++i) {
+            pipe->anchor_cov[i] += pipe->held_cov[i];
+        }
+        pipe->was_held = 0;
+    }
+    for (int i = 0; i < 36; ++i) {
+        est->cov[i] += pipe->anchor_cov[i];
+    }
+    pipe->last = *est;
+}
+
 /* The checks every step starts with (arguments, time order); on success a fresh report for
  * this step. RP_OK or the status to return (est then filled as rp_pipe.h says). */
 static rp_status_t step_begin(rp_pipe_t *pipe, int args_ok, int64_t utime, rp_estimate_t *est)
@@ -403,20 +435,19 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
         taken = (uint8_t)(taken + image_taken(s));
         lacking = (uint8_t)(lacking + (s != RP_PIPE_CAM_OK));
     }
-    if (taken == 0) {
-        *est = pipe->last;
-        est->utime = utime;
-        est->flags |= RP_EST_LOST | RP_EST_DEGRADED;
-        info->est_status = RP_OK;
-        return RP_E_DEGENERATE;
-    }
+    /* No image at all: the estimator still runs, on an empty frame set, so that it predicts
+     * to utime (the covariance grows, the prediction is bounded: rp_ekf_predict) and reports
+     * LOST with nothing used, as for blank images. */
     const rp_status_t st = run_estimator(pipe, est);
     if (lacking > 0) {
         est->flags |= RP_EST_DEGRADED;
     }
+    if (taken == 0) {
+        est->flags |= RP_EST_LOST; /* nothing measured, whatever the layout says (its start) */
+    }
     info->est_status = st;
-    pipe->last = *est;
-    return st;
+    finish(pipe, est);
+    return taken == 0 ? RP_E_DEGENERATE : st;
 }
 
 rp_status_t rp_pipe_step_feats(rp_pipe_t *pipe, const rp_frameset_t *fs, rp_estimate_t *est)
@@ -432,7 +463,7 @@ rp_status_t rp_pipe_step_feats(rp_pipe_t *pipe, const rp_frameset_t *fs, rp_esti
     }
     const rp_status_t st = run_estimator(pipe, est);
     pipe->info.est_status = st;
-    pipe->last = *est;
+    finish(pipe, est);
     return st;
 }
 

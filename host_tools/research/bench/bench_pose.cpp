@@ -3,7 +3,7 @@
  *
  * The program is a list of sections. Each section measures something and adds named figures
  * (numbers only) to one map; at the end the map is written as one flat JSON object
- * (build/bench.json, DESIGN.md "Benchmarks") and every section prints its own readable table.
+ * (build/bench.json, docs/design.md "Benchmarks") and every section prints its own readable table.
  * A figure that could not be measured (no frame timed, non-finite value, a peer that never
  * produced a pose) is left out, never faked. To add a benchmark: write a section function and
  * add it to kSections.

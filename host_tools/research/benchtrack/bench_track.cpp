@@ -117,7 +117,7 @@ struct rp_side {
         if (r != nullptr) {
             r->feats += n;
             for (int i = 0; i < n; ++i) {
-                const uint32_t idx = out[i].id / RP_MAX_CAMS;
+                const uint32_t idx = rp_track_id_serial(out[i].id);
                 if (idx >= born[k].size()) {
                     born[k].resize(idx + 1, birth{-1, {0, 0}, -9, {0, 0}});
                 }

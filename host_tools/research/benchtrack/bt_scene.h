@@ -1,6 +1,6 @@
 /*
  * bt_scene.h - the tracker benchmark's scene: the paper's four single cameras (cam1..cam4 of
- * DESIGN.md, fx = fy = 800 px at 640x480, scaled with the width, principal point at the centre)
+ * docs/design.md, fx = fy = 800 px at 640x480, scaled with the width, principal point at the centre)
  * inside a box room whose four walls carry natural-looking seeded textures, moving along the
  * paper's simulated trajectory (rp_sim: per-frame random translation and rotation). Each camera
  * sees its own wall (a plane), so every image is an exact plane-induced warp of its texture and

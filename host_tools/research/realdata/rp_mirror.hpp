@@ -8,7 +8,7 @@
  *   - the cameras swapped: the mirrored left camera (rig camera 0) is the original right
  *     camera's mirror image, the mirrored right camera the original left's;
  *   - each camera: a point X of its frame is seen as M X; with u' = w - 1 - u (the pixel
- *     centres' convention, DESIGN.md) the intrinsics keep fx, fy, cy and take cx' = w - 1 - cx;
+ *     centres' convention, docs/design.md) the intrinsics keep fx, fy, cy and take cx' = w - 1 - cx;
  *     OpenCV's radial-tangential distortion keeps k1, k2, k3 and p1 and takes p2' = -p2
  *     (x_d = x (1 + k1 r^2 + ...) + 2 p1 x y + p2 (r^2 + 2 x^2): odd in x only if p2 flips;
  *     y_d = y (...) + p1 (r^2 + 2 y^2) + 2 p2 x y: even in x only if p2 flips);

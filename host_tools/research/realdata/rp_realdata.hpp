@@ -4,7 +4,7 @@
  * pair, the frames' image paths and times, the ground truth in rigpose's conventions), the
  * conversions between rigpose's pose vector and the datasets' poses, and the trajectory error.
  *
- * rigpose's conventions (DESIGN.md): the world is cam1's frame at the first frame; a pose is
+ * rigpose's conventions (docs/design.md): the world is cam1's frame at the first frame; a pose is
  * p = [tx ty tz alpha beta gamma]: cam1's position in the world (m) and its rotation
  * R = Rz(gamma) Ry(beta) Rx(alpha) (camera-to-world). Here cam1 (rig camera 0) is the left
  * camera of the pair (KITTI image_0 / "left", EuRoC cam0), rig camera 1 the right one.

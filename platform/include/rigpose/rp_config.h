@@ -14,6 +14,15 @@
  *
  * Every error is one line "FILE:LINE: KEY: what is wrong" (KEY is the path from the top, e.g.
  * cameras[2].intrinsics); the first error found is reported and the load fails as a whole.
+ * Control characters and invalid UTF-8 echoed from the file are written \xNN in the message.
+ *
+ * Hostile input: a file larger than RP_CFG_MAX_BYTES, nested deeper than RP_CFG_MAX_DEPTH
+ * (anywhere, meta: included: libyaml's loader takes minutes on deep nesting, so a first pass
+ * over libyaml's events stops at the limit), with more than RP_CFG_MAX_NODES nodes (1 MiB of
+ * "1," under meta: took 83 MB to load) or holding a second YAML document is refused with
+ * RP_CFG_E_SYNTAX before the document is built. Intrinsics outside a sane range and distortion
+ * that folds or grossly stretches the image (checked over rays from the principal point to the
+ * image border) are refused (RP_CFG_E_RANGE); config/README.md gives the rules.
  */
 #ifndef RP_CONFIG_H
 #define RP_CONFIG_H
@@ -46,6 +55,9 @@ const char *rp_cfg_status_str(rp_cfg_status_t s);
 #define RP_CFG_CHANNEL_MAX 64  /* LCM channel names, with the NUL */
 #define RP_CFG_URL_MAX 256     /* LCM URL, with the NUL */
 #define RP_CFG_ERR_MAX 512     /* a useful size for the error buffer */
+#define RP_CFG_MAX_BYTES (1024 * 1024) /* largest file read */
+#define RP_CFG_MAX_DEPTH 32    /* deepest nesting of mappings and sequences */
+#define RP_CFG_MAX_NODES 100000 /* scalars, sequences, mappings and aliases in the file */
 
 /* The feature-level simulation behind the sim source (source.sim in the file). */
 typedef struct {

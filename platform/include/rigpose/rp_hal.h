@@ -84,6 +84,11 @@ typedef struct {
     uint32_t sim_frames;                 /* sim: frames in the run (0 = the protocol's 100) */
     uint8_t sim_layout;                  /* sim: 0 = both stereo pairs (4 cams), 1 = four singles */
     uint8_t realtime;                    /* replay / sim: pace sets at their timestamps */
+    uint8_t partial_sets;                /* replay: a row whose image cannot be read for some
+                                          * cameras comes as a set with those cameras MISSING
+                                          * (RP_HAL_OK, the reason in rp_hal_errmsg) - the
+                                          * daemon; 0: the row fails with its first camera's
+                                          * error (a recorder wants whole sets) */
     const struct rp_hal_sim_opts *sim_opts; /* sim: pixel noise, a vanishing camera
                                              * (rp_hal_sim.h); NULL: the protocol's defaults.
                                              * Read by rp_hal_open only */
@@ -135,8 +140,11 @@ void rp_hal_close(rp_hal_source_t *src);
 rp_hal_payload_t rp_hal_payload(const rp_hal_source_t *src);
 
 /* What went wrong in the source's last failing call, in words naming the device or file (and
- * line), e.g. "rec/frames.csv:7: want utime_us and 4 image paths"; "" if nothing failed. src NULL:
- * why the last rp_hal_open failed. Never NULL. */
+ * line, camera), e.g. "rec/frames.csv:7: want utime_us and 4 image paths"; "" if nothing
+ * failed. After a grab that returned RP_HAL_OK it is "" unless the set is degraded: then why its
+ * cameras are missing (a v4l2 camera lost, a replay image unreadable with partial_sets). Control
+ * characters and invalid UTF-8 echoed from files come escaped as \xNN. src NULL: why the last
+ * rp_hal_open failed. Never NULL. */
 const char *rp_hal_errmsg(const rp_hal_source_t *src);
 
 /* Clock (CLOCK_MONOTONIC, microseconds) and sleep. */

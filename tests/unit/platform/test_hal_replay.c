@@ -1,7 +1,11 @@
 /*
  * test_hal_replay.c - the HAL's dispatch (rp_hal_common.c) and its replay source on folders the
- * test writes: PGM and PNG images, truth, pacing, and each kind of bad input with its error.
+ * test writes: PGM and PNG images, truth, pacing, and each kind of bad input with its error:
+ * lines of any length (comments skipped whole, long rows refused naming file:line), FIFOs,
+ * devices and folders listed as images refused without blocking, a missing image costing only
+ * its camera, pacing at the ends of int64, control characters escaped in messages.
  */
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -265,6 +269,31 @@ static void test_replay_malformed_images(void **state)
     rp_hal_close(src);
 }
 
+/* replay_index naming a file reads that file, whatever its name; a renamed or missing index is
+ * named in the error (frames.csv beside it is not read instead). */
+static void test_replay_index_file_by_name(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0\n10,x.pgm\n");
+    write_file("index.csv", "utime_us,cam0\n20,x.pgm\nbad\n");
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/index.csv", g_dir);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 20);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    assert_non_null(strstr(rp_hal_errmsg(src), "index.csv:3: want utime_us"));
+    rp_hal_close(src);
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/renamed.csv", g_dir);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("renamed index: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "renamed.csv: No such file or directory"));
+}
+
 /* Given cameras naming their columns, each reads its own column whatever the order; columns no
  * camera names are skipped. */
 static void test_replay_named_columns(void **state)
@@ -329,6 +358,304 @@ static void test_replay_realtime(void **state)
     rp_hal_close(src);
 }
 
+/* Every byte of the message is printable ASCII (control characters escaped). */
+static void assert_printable(const char *msg)
+{
+    for (const unsigned char *p = (const unsigned char *)msg; *p != '\0'; p++) {
+        if (*p < 0x20 || *p >= 0x7f) {
+            fail_msg("byte 0x%02x in message: %s", *p, msg);
+        }
+    }
+}
+
+/* Comments are skipped whole however long (a 100 KB one, and one whose tail beyond 1,599
+ * characters is a valid row); a data row longer than the limit, or with a NUL byte, is refused
+ * naming file:line, and the next grab goes on with the next row. */
+static void test_replay_lines_of_any_length(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    char p[256];
+    snprintf(p, sizeof p, "%s/frames.csv", g_dir);
+    FILE *f = fopen(p, "w");
+    assert_non_null(f);
+    fputs("utime_us,cam0\n10,x.pgm\n#", f);                 /* lines 1, 2 */
+    for (int i = 0; i < 100000; i++) {                       /* line 3: 100 KB comment */
+        fputc('c', f);
+    }
+    fputs("\n20,x.pgm\n#", f);                               /* line 4 */
+    for (int i = 0; i < 1598; i++) {                         /* line 5: tail is a row */
+        fputc('c', f);
+    }
+    fputs("25,x.pgm\n30,x.pgm\n40,", f);                     /* line 6 */
+    for (int i = 0; i < 2000; i++) {                         /* line 7: too long a row */
+        fputc('a', f);
+    }
+    fputs("\n50,x.pgm\n60,x.p", f);                          /* line 8 */
+    fputc('\0', f);                                          /* line 9: a NUL byte */
+    fputs("gm\n70,x.pgm", f);                                /* line 10, no newline */
+    fclose(f);
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    const int64_t want[3] = {10, 20, 30};
+    for (int j = 0; j < 3; j++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_true(set.utime == want[j]);
+        assert_string_equal(rp_hal_errmsg(src), "");
+    }
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    printf("long row: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:7: line longer than 1599 characters"));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 50);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    printf("NUL byte: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:9: NUL byte"));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 70);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    assert_non_null(strstr(rp_hal_errmsg(src), "end after 5 sets"));
+    rp_hal_close(src);
+
+    /* A header over the limit is refused at open, naming file:1. */
+    f = fopen(p, "w");
+    assert_non_null(f);
+    fputs("utime_us", f);
+    for (int i = 0; i < 1000; i++) {
+        fputs(",c", f);
+    }
+    fputs("\n", f);
+    fclose(f);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_FORMAT);
+    printf("long header: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "frames.csv:1: line longer than"));
+}
+
+/* A FIFO, a device and a folder listed as images are refused without opening them for reading
+ * (nothing blocks): their camera is MISSING in that set, the message names line, camera, file
+ * and why, and the other camera's image comes. frames.csv and truth.csv that are not regular
+ * files are refused at open. */
+static void test_replay_only_regular_files(void **state)
+{
+    (void)state;
+    alarm(20); /* a blocking open would hang: SIGALRM fails the test instead */
+    write_pgm("x.pgm", 0, W, H);
+    char p[256];
+    snprintf(p, sizeof p, "%s/fifo.pgm", g_dir);
+    assert_int_equal(mkfifo(p, 0600), 0);
+    snprintf(p, sizeof p, "%s/dir.pgm", g_dir);
+    assert_int_equal(mkdir(p, 0700), 0);
+    write_file("frames.csv", "utime_us,cam0,cam1\n10,x.pgm,fifo.pgm\n20,/dev/zero,x.pgm\n"
+                             "30,x.pgm,dir.pgm\n40,fifo.pgm,dir.pgm\n50,x.pgm,x.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    cfg.partial_sets = 1;
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    const struct {
+        int bad;
+        const char *what;
+    } rows[3] = {{1, "frames.csv:2: camera 1: "}, {0, "frames.csv:3: camera 0: /dev/zero: is a device"},
+                 {1, "frames.csv:4: camera 1: "}};
+    for (int j = 0; j < 3; j++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        printf("row %d: %s\n", j + 2, rp_hal_errmsg(src));
+        assert_non_null(strstr(rp_hal_errmsg(src), rows[j].what));
+        assert_int_equal(set.cam[rows[j].bad].flags, RP_HAL_CAM_MISSING);
+        assert_null(set.cam[rows[j].bad].img.data);
+        assert_int_equal(set.cam[1 - rows[j].bad].flags, RP_HAL_CAM_OK);
+        check_image(&set.cam[1 - rows[j].bad], 0);
+    }
+    assert_non_null(strstr(rp_hal_errmsg(src), "dir.pgm: is a directory"));
+    /* Neither image readable: the row fails, naming the first camera's file. */
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_OPEN);
+    printf("row 5: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:5: camera 0: "));
+    assert_non_null(strstr(rp_hal_errmsg(src), "fifo.pgm: is a FIFO, not a regular file"));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_string_equal(rp_hal_errmsg(src), "");
+    assert_int_equal(set.cam[0].flags | set.cam[1].flags, RP_HAL_CAM_OK);
+    rp_hal_close(src);
+
+    /* frames.csv a folder, truth.csv a FIFO. */
+    snprintf(p, sizeof p, "%s/sub", g_dir);
+    assert_int_equal(mkdir(p, 0700), 0);
+    snprintf(p, sizeof p, "%s/sub/frames.csv", g_dir);
+    assert_int_equal(mkdir(p, 0700), 0);
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/sub", g_dir);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("frames.csv a folder: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "sub/frames.csv: is a directory"));
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/sub/frames.csv", g_dir);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("replay_index a folder named frames.csv: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "sub/frames.csv/frames.csv: No such file or "
+                                                "directory (replay_index "));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "sub/frames.csv is a folder: its frames.csv"));
+    snprintf(p, sizeof p, "%s/truth.csv", g_dir);
+    assert_int_equal(mkfifo(p, 0600), 0);
+    cfg = replay_cfg(2);
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_OPEN);
+    printf("truth.csv a FIFO: %s\n", rp_hal_errmsg(NULL));
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "truth.csv: is a FIFO"));
+    alarm(0);
+}
+
+/* Pacing across the whole allowed range of times (+-2^61 us): no overflow (UBSan would stop
+ * the test), the far set is a timeout after timeout_ms, never a sleep of millennia; times
+ * beyond the range (differences could overflow in the estimators) are refused. */
+static void test_replay_pacing_saturates(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0\n-9223372036854775807,x.pgm\n"
+                             "-2305843009213693952,x.pgm\n2305843009213693952,x.pgm\n"
+                             "9223372036854775807,x.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    cfg.realtime = 1;
+    cfg.timeout_ms = 50;
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    printf("too early: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:2: utime_us -9223372036854775807 outside"));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == -((int64_t)1 << 61));
+    const int64_t t0 = rp_hal_now_us();
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_TIMEOUT);
+    const int64_t dt = rp_hal_now_us() - t0;
+    printf("far set: %s (after %.1f ms)\n", rp_hal_errmsg(src), (double)dt / 1000.0);
+    assert_true(dt >= 50000 && dt < 1000000);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_TIMEOUT); /* still due in millennia */
+    rp_hal_close(src);
+    cfg.realtime = 0;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == ((int64_t)1 << 61));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:5: utime_us 9223372036854775807"));
+    rp_hal_close(src);
+}
+
+/* With partial_sets a missing image costs only its camera (without, the row fails); control
+ * characters in a path come out escaped. */
+static void test_replay_missing_image_one_camera(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0,cam1\n10,x.pgm,x.pgm\n20,x.pgm,gone\x1b[31m\t.pgm\n"
+                             "30,x.pgm,x.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    cfg.partial_sets = 1;
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    printf("missing image of camera 1: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:3: camera 1: "));
+    assert_non_null(strstr(rp_hal_errmsg(src), "gone\\x1b[31m\\x09.pgm: No such file"));
+    assert_printable(rp_hal_errmsg(src));
+    assert_true(set.utime == 20 && set.seq == 1);
+    assert_int_equal(set.cam[0].flags, RP_HAL_CAM_OK);
+    check_image(&set.cam[0], 0);
+    assert_int_equal(set.cam[1].flags, RP_HAL_CAM_MISSING);
+    assert_null(set.cam[1].img.data);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_string_equal(rp_hal_errmsg(src), "");
+    assert_int_equal(set.cam[1].flags, RP_HAL_CAM_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    rp_hal_close(src);
+    /* Without partial_sets (a recorder wants whole sets) the row fails as a whole. */
+    cfg.partial_sets = 0;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_OPEN);
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:3: camera 1: "));
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == 30);
+    rp_hal_close(src);
+}
+
+/* 2,000 corrupted copies of a small frames.csv (1..6 bytes each replaced by a random byte, a
+ * comma, a newline, '#', NUL, a path separator...; a fixed seed), each opened and grabbed to its
+ * end: every failure has a printable message naming frames.csv, nothing crashes (ASan, UBSan)
+ * or blocks, and at most one grab per line of the file. */
+static void test_replay_corrupted_index_never_crashes(void **state)
+{
+    (void)state;
+    alarm(120);
+    write_pgm("a.pgm", 0, W, H);
+    write_png("b.png", 1);
+    static const char orig[] = "utime_us,cam0,cam1\n10,a.pgm,b.png\n# note\n20,b.png,a.pgm\n"
+                               "\n30,a.pgm,a.pgm\n40,/dev/zero,b.png\n";
+    static const char special[] = ",\n#\r /.\x1b\xff-9";
+    const size_t n = sizeof orig - 1;
+    char text[sizeof orig];
+    uint32_t rng = 777u;
+    unsigned sets = 0, failures = 0;
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    cfg.partial_sets = 1;
+    char p[256];
+    snprintf(p, sizeof p, "%s/frames.csv", g_dir);
+    for (int trial = 0; trial < 2000; ++trial) {
+        memcpy(text, orig, n);
+        rng = rng * 1664525u + 1013904223u;
+        const unsigned edits = 1u + (rng >> 16) % 6u;
+        for (unsigned e = 0; e < edits; ++e) {
+            rng = rng * 1664525u + 1013904223u;
+            const size_t at = (size_t)(rng >> 8) % n;
+            rng = rng * 1664525u + 1013904223u;
+            const unsigned pick = (rng >> 24) % 3u;
+            text[at] = pick == 0 ? (char)(rng >> 16)
+                       : pick == 1 ? '\0'
+                                   : special[(rng >> 8) % (sizeof special - 1)];
+        }
+        FILE *f = fopen(p, "wb");
+        assert_non_null(f);
+        assert_int_equal(fwrite(text, 1, n, f), n);
+        fclose(f);
+        rp_hal_source_t *src;
+        rp_hal_set_t set;
+        const rp_hal_status_t so = rp_hal_open(&src, &cfg);
+        if (so != RP_HAL_OK) {
+            assert_non_null(strstr(rp_hal_errmsg(NULL), "frames.csv"));
+            assert_printable(rp_hal_errmsg(NULL));
+            failures++;
+            continue;
+        }
+        assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+        int grabs = 0;
+        rp_hal_status_t st;
+        while ((st = rp_hal_grab(src, &set)) != RP_HAL_E_END) {
+            assert_true(++grabs <= 12);
+            assert_printable(rp_hal_errmsg(src));
+            if (st == RP_HAL_OK) {
+                sets++;
+            } else {
+                failures++;
+                assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv"));
+            }
+        }
+        rp_hal_close(src);
+    }
+    alarm(0);
+    printf("2000 corrupted frames.csv: %u sets delivered, %u failures, each with its message\n",
+           sets, failures);
+    assert_true(sets > 1000 && failures > 1000);
+}
+
 /* The dispatch: bad arguments, one source at a time, status strings. */
 static void test_hal_dispatch(void **state)
 {
@@ -370,7 +697,15 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_replay_malformed_csv, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_malformed_images, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_named_columns, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_index_file_by_name, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_realtime, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_lines_of_any_length, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_only_regular_files, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_pacing_saturates, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_missing_image_one_camera, setup_dir,
+                                        remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_corrupted_index_never_crashes, setup_dir,
+                                        remove_dir),
         cmocka_unit_test_setup_teardown(test_hal_dispatch, setup_dir, remove_dir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

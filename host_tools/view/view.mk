@@ -1,0 +1,28 @@
+# host_tools/view/view.mk - rigpose-view (Python, PyPI foxglove-sdk) and its tests (included by
+# the top-level Makefile).
+#
+#   $(REL)/rigpose-view             wrapper: the venv's Python, the generated `rigpose` package,
+#                                   host_tools/view/rigpose_view.py
+#   host_tools/view/test_view.sh    the README's quick start (daemon, rigpose-view --mcap, check);
+#                                   every pose of a 300-set run in the MCAP (PyPI mcap); an LCM log
+#                                   through `rigpose-log mcap`; a WebSocket client on the live
+#                                   server receives the poses; camera images of a rendered run
+
+VIEW_BIN := $(REL)/rigpose-view
+$(VIEW_BIN): host_tools/view/view.mk $(BUILD)/lcmgen/stamp
+	@mkdir -p $(@D)
+	printf '#!/bin/sh\n# rigpose-view of %s (host_tools/view/rigpose_view.py)\nPYTHONPATH="%s$${PYTHONPATH:+:$$PYTHONPATH}" exec "%s" "%s" "$$@"\n' \
+	    "$(CURDIR)" "$(abspath $(BUILD)/lcmgen/python)" "$(PY)" "$(CURDIR)/host_tools/view/rigpose_view.py" > $@
+	chmod +x $@
+
+EXTRA_TOOLS += $(VIEW_BIN)
+HOST_EXTRA_TESTS += host_tools/view/test_view.sh
+SERIAL_TESTS += host_tools/view/test_view.sh
+test: $(VIEW_BIN) $(REL)/rigpose $(REL)/rigpose-log $(REL)/rigpose-render
+export RP_VIEW_BIN = $(VIEW_BIN)
+
+# The Foxglove layout for these topics, regenerated from host_tools/view/make_layout.py
+# (test_view.sh checks the committed file is what the script writes).
+.PHONY: view-layout
+view-layout: deps
+	$(PY) host_tools/view/make_layout.py host_tools/view/rigpose.layout.json
