@@ -6,7 +6,8 @@
 #   $(BUILD)/common/test_lcmlog           its cmocka test (ASan + UBSan), run by make test
 #   host_tools/common/test_lcmlog_cli.sh  rigpose-eval and rigpose-log replay on a log with a
 #                                         0x7fffffff length, a truncated one and one with garbage
-#                                         mid-way (one line with the offset, exit 1; --tolerant)
+#                                         mid-way (one line with the offset, exit 1; --tolerant),
+#                                         and rigpose-log mcap (rigpose-view, rp_lcmlog.py) on them
 
 CMN := $(BUILD)/common
 LCMLOG_OBJ := $(CMN)/rp_lcmlog.o
@@ -23,5 +24,5 @@ $(CMN)/test_lcmlog: host_tools/common/test_lcmlog.c host_tools/common/rp_lcmlog.
 	    -o $@ $(SAN) -lcmocka -llcm
 
 HOST_EXTRA_TESTS += $(CMN)/test_lcmlog host_tools/common/test_lcmlog_cli.sh
-test: $(CMN)/test_lcmlog $(REL)/rigpose-eval $(REL)/rigpose-log
+test: $(CMN)/test_lcmlog $(REL)/rigpose-eval $(REL)/rigpose-log $(REL)/rigpose-view
 export RP_LCMLOG_WORK = $(CMN)/work

@@ -10,8 +10,11 @@
 # and the result is that of the clean log (same evaluation, same replay folder).
 # Also negsize.log: a well-formed log whose image_t claims size -1 (lcm-gen's decoder copies
 # (size_t)-1 bytes): rigpose-log replay counts it as not an image and replays the rest.
+# `rigpose-log mcap` (rigpose-view --lcm-log, Python: rp_lcmlog.py; PyPI lcm's EventLog died with
+# SIGSEGV on huge.log) the same: one line with the offset, exit 1, no MCAP; --tolerant converts.
 set -u
 eval_bin=${RP_EVAL_BIN:-build/release/rigpose-eval}
+view_bin=${RP_VIEW_BIN:-build/release/rigpose-view}
 log_bin=${RP_LOG_BIN:-build/release/rigpose-log}
 work=${RP_LCMLOG_WORK:-build/common/work}
 PY=${PY:-.venv/bin/python}
@@ -108,6 +111,23 @@ check "rigpose-log replay --tolerant garbage.log: exit 0, 100 bytes skipped, the
 "$eval_bin" --tolerant "$work/trunc.log" > /dev/null 2> "$work/eval_tol_trunc.err"; rc=$?
 check "rigpose-eval --tolerant trunc.log: exit 0, the cut tail skipped and said" \
   '[ $rc -eq 0 ] && grep -q "skipped the last" "$work/eval_tol_trunc.err"'
+
+# rigpose-log mcap: rigpose-view reads the log with rp_lcmlog.py.
+if [ -x "$view_bin" ]; then
+  for kind in huge trunc garbage; do
+    off=$(cat "$work/$kind.off")
+    "$log_bin" mcap "$work/$kind.log" "$work/$kind.mcap" --quiet > /dev/null 2> "$work/mcap_$kind.err"; rc=$?
+    cat "$work/mcap_$kind.err"
+    check "rigpose-log mcap $kind.log: exit 1 ($rc), one line naming offset $off, no MCAP" \
+      '[ $rc -eq 1 ] && [ $(wc -l < "$work/mcap_$kind.err") -eq 1 ] && grep -q ": $work/$kind.log: offset $off: " "$work/mcap_$kind.err" && [ ! -e "$work/$kind.mcap" ]'
+  done
+  "$log_bin" mcap "$work/garbage.log" "$work/tol.mcap" --tolerant > "$work/mcap_tol.out" 2> "$work/mcap_tol.err"; rc=$?
+  cat "$work/mcap_tol.err" "$work/mcap_tol.out"
+  check "rigpose-log mcap --tolerant garbage.log: exit 0, 100 bytes skipped, 10 poses and 8 images" \
+    '[ $rc -eq 0 ] && grep -q "skipped 100 bytes" "$work/mcap_tol.err" && grep -q "10 poses (last seq 9), 8 images" "$work/mcap_tol.out" && [ -s "$work/tol.mcap" ]'
+else
+  echo "test_lcmlog_cli: no $view_bin: rigpose-log mcap not checked"
+fi
 
 # An image_t with size -1 (lcm-gen's decoder would copy (size_t)-1 bytes).
 "$log_bin" replay "$work/negsize.log" --dir "$work/dir_neg" 2> "$work/log_neg.err"; rc=$?
