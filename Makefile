@@ -9,6 +9,7 @@
 #   make cross      aarch64 build of the core (float, double) and the daemon
 #   make test-arm   the core's tests, cross-built for aarch64, run under qemu-aarch64
 #   make bench      benchmarks; prints figures and writes build/bench.json (QUICK=1: short)
+#   make fuzz       every libFuzzer target of tests/fuzz/ for FUZZ_S seconds (default 60)
 #
 # The first make on a machine runs scripts/install-deps.sh, which installs what is missing.
 

@@ -6,7 +6,8 @@
 # x11-utils, xdotool take lcm-spy's screenshot (scripts/lcm-spy-screenshot.sh).
 #
 # usage: scripts/install-deps.sh [host|cross|py|all]   (default: all)
-#   host   Debian packages for the host build, tests, tools and the V4L2 VM test
+#   host   Debian packages for the host build, tests, tools, the V4L2 VM test and the fuzz
+#          targets (clang with its libFuzzer runtime, libclang-rt-14-dev: Debian 12's clang 14)
 #   cross  the aarch64 toolchain, qemu-user and arm64 libraries (Debian multiarch)
 #   py     host + a virtual environment .venv/ (Debian's python3) with the PyPI packages of
 #          the Python-side clients and tests (lcm bindings, evo; foxglove-sdk for rigpose-view,
@@ -21,7 +22,7 @@ host_pkgs=(build-essential g++ make pkg-config
            python3 python3-venv opencv-doc
            qemu-system-x86 busybox-static xz-utils cpio libpng-dev libjpeg-dev
            liblcm-java libjchart2d-java default-jdk-headless default-jre xvfb imagemagick
-           x11-utils xdotool)
+           x11-utils xdotool clang libclang-rt-14-dev)
 cross_pkgs=(gcc-aarch64-linux-gnu g++-aarch64-linux-gnu qemu-user libcmocka-dev:arm64)
 
 SUDO=""

@@ -10,13 +10,13 @@
 EVAL_DIR := $(BUILD)/eval
 EVAL_BIN := $(REL)/rigpose-eval
 EVAL_TEST := $(EVAL_DIR)/test_eval
-EVAL_HDR := host_tools/eval/rp_eval.hpp $(wildcard core/include/rigpose/*.h)
+EVAL_HDR := host_tools/eval/rp_eval.hpp host_tools/common/rp_lcmlog.h $(wildcard core/include/rigpose/*.h)
 EVAL_LCM := $(BUILD)/lcmgen
 
 # Recursively expanded: pkg-config runs when the recipe runs, after `deps` installed OpenCV.
 EVAL_CXXFLAGS = -std=c++14 -O2 -g -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EIGEN=1 $(WARN) \
     $(patsubst -I%,-isystem %,$(shell pkg-config --cflags opencv4)) $(INC) -Ihost_tools/eval \
-    -isystem $(EVAL_LCM)/c
+    -Ihost_tools/common -isystem $(EVAL_LCM)/c
 EVAL_LIBS = $(EVAL_LCM)/librigpose_lcm.a $(REL)/librigpose_core.a -llcm -lopencv_imgcodecs \
     -lopencv_imgproc -lopencv_core -lstdc++ -lm
 
@@ -24,14 +24,14 @@ $(EVAL_DIR)/rp_eval.o: host_tools/eval/rp_eval.cpp $(EVAL_HDR) $(EVAL_LCM)/stamp
 	@mkdir -p $(@D)
 	$(CXX) $(EVAL_CXXFLAGS) -c $< -o $@
 
-$(EVAL_BIN): host_tools/eval/rigpose_eval.cpp $(EVAL_DIR)/rp_eval.o $(EVAL_LCM)/librigpose_lcm.a \
-             $(REL)/librigpose_core.a
+$(EVAL_BIN): host_tools/eval/rigpose_eval.cpp $(EVAL_DIR)/rp_eval.o $(LCMLOG_OBJ) \
+             $(EVAL_LCM)/librigpose_lcm.a $(REL)/librigpose_core.a
 	@mkdir -p $(@D)
-	$(CXX) $(EVAL_CXXFLAGS) $< $(EVAL_DIR)/rp_eval.o -o $@ $(EVAL_LIBS)
+	$(CXX) $(EVAL_CXXFLAGS) $< $(EVAL_DIR)/rp_eval.o $(LCMLOG_OBJ) -o $@ $(EVAL_LIBS)
 
-$(EVAL_TEST): host_tools/eval/test_eval.cpp $(EVAL_DIR)/rp_eval.o $(EVAL_LCM)/librigpose_lcm.a \
-              $(REL)/librigpose_core.a
-	$(CXX) $(EVAL_CXXFLAGS) $< $(EVAL_DIR)/rp_eval.o -o $@ $(EVAL_LIBS)
+$(EVAL_TEST): host_tools/eval/test_eval.cpp $(EVAL_DIR)/rp_eval.o $(LCMLOG_OBJ) \
+              $(EVAL_LCM)/librigpose_lcm.a $(REL)/librigpose_core.a
+	$(CXX) $(EVAL_CXXFLAGS) $< $(EVAL_DIR)/rp_eval.o $(LCMLOG_OBJ) -o $@ $(EVAL_LIBS)
 
 EXTRA_TOOLS += $(EVAL_BIN)
 HOST_EXTRA_TESTS += $(EVAL_TEST) host_tools/eval/test_eval_evo.sh

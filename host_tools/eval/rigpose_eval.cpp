@@ -22,7 +22,10 @@
  *   --plot FILE.png         six panels: tx ty tz alpha beta gamma against frame
  *   --title TEXT            the plot's title
  *   --json FILE             {"eval_<name>_ate_rmse_m": ..., "eval_<name>_rpe_trans_rmse_m": ...}
- * Exit: 0 done, 1 a file could not be read / evaluated, 2 usage.
+ *   --tolerant              read LCM logs on past truncated / corrupt stretches (one warning line
+ *                           per skip: offset and bytes skipped) instead of refusing them
+ * Exit: 0 done, 1 a file could not be read / evaluated (a truncated or corrupt LCM log: one line
+ * "FILE: offset N: what"), 2 usage.
  */
 #include <sys/stat.h>
 
@@ -45,7 +48,7 @@ void usage(FILE *out)
                  "         [--align none|se3|sim3] [--delta N] [--max-dt-us N] [--channel NAME]\n"
                  "         [--tum-dir DIR] [--kitti-dir DIR] [--euroc-dir DIR]\n"
                  "         [--format tum|kitti|euroc --out-dir DIR] [--plot FILE.png] [--title TEXT]\n"
-                 "         [--json FILE]\n"
+                 "         [--json FILE] [--tolerant]\n"
                  "estimates: LCM log (rigpose.pose_t), TUM, rigpose CSV or KITTI; truth: truth.csv,\n"
                  "TUM, or the truth inside the first LCM log\n");
 }
@@ -76,6 +79,7 @@ int main(int argc, char **argv)
     rpe::Align align = rpe::Align::none;
     int delta = 1;
     long long max_dt = 1000;
+    bool tolerant = false;
     std::vector<Est> ests;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -126,6 +130,8 @@ int main(int argc, char **argv)
             title = argv[++i];
         } else if (a == "--json" && v) {
             json = argv[++i];
+        } else if (a == "--tolerant") {
+            tolerant = true;
         } else if (!a.empty() && a[0] != '-') {
             Est e;
             e.path = a;
@@ -145,7 +151,7 @@ int main(int argc, char **argv)
     for (Est &e : ests) {
         std::string method;
         rpe::Traj lt;
-        if (!rpe::load(e.path, channel, &e.traj, &lt, &method, &why)) {
+        if (!rpe::load(e.path, channel, &e.traj, &lt, &method, &why, tolerant)) {
             std::fprintf(stderr, "rigpose-eval: %s\n", why.c_str());
             return 1;
         }
@@ -157,7 +163,7 @@ int main(int argc, char **argv)
         }
     }
     if (!truth_path.empty()) {
-        if (!rpe::load(truth_path, channel, &truth, nullptr, nullptr, &why)) {
+        if (!rpe::load(truth_path, channel, &truth, nullptr, nullptr, &why, tolerant)) {
             std::fprintf(stderr, "rigpose-eval: %s\n", why.c_str());
             return 1;
         }

@@ -11,13 +11,13 @@
 #include <fstream>
 #include <sstream>
 
-#include <lcm/eventlog.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "rigpose/rp_pipe.h"
 #include "rigpose/rp_rot.h"
 #include "rigpose_pose_t.h"
+#include "rp_lcmlog.h"
 
 namespace rpe {
 
@@ -62,24 +62,27 @@ static std::string at(const std::string &path, int line)
 }
 
 static bool load_lcm(const std::string &path, const std::string &channel, Traj *out, Traj *truth,
-                     std::string *method, std::string *why)
+                     std::string *method, bool tolerant, std::string *why)
 {
-    lcm_eventlog_t *log = lcm_eventlog_create(path.c_str(), "r");
-    if (!log) {
-        *why = path + ": cannot open the LCM log";
+    rp_lcmlog_t log;
+    if (rp_lcmlog_open(&log, path.c_str(), tolerant) != 0) {
+        *why = log.err;
+        rp_lcmlog_close(&log);
         return false;
     }
+    log.warn = stderr;
+    log.prog = "rigpose-eval";
     int64_t n_bad = 0, n_other = 0;
-    while (lcm_eventlog_event_t *ev = lcm_eventlog_read_next_event(log)) {
-        if (channel != ev->channel) {
+    rp_lcmlog_event_t ev;
+    int r;
+    while ((r = rp_lcmlog_next(&log, &ev)) > 0) {
+        if (channel != ev.channel) {
             ++n_other;
-            lcm_eventlog_free_event(ev);
             continue;
         }
         rigpose_pose_t m;
-        if (rigpose_pose_t_decode(ev->data, 0, static_cast<int>(ev->datalen), &m) < 0) {
+        if (rigpose_pose_t_decode(ev.data, 0, static_cast<int>(ev.datalen), &m) < 0) {
             ++n_bad;
-            lcm_eventlog_free_event(ev);
             continue;
         }
         Pose p;
@@ -99,9 +102,13 @@ static bool load_lcm(const std::string &path, const std::string &channel, Traj *
             *method = rp_pipe_layout_name(static_cast<rp_pipe_layout_t>(m.method));
         }
         rigpose_pose_t_decode_cleanup(&m);
-        lcm_eventlog_free_event(ev);
     }
-    lcm_eventlog_destroy(log);
+    if (r < 0) { /* truncated or corrupt: the whole file is refused (--tolerant reads on) */
+        *why = log.err;
+        rp_lcmlog_close(&log);
+        return false;
+    }
+    rp_lcmlog_close(&log);
     if (n_bad > 0) {
         std::fprintf(stderr, "%s: %" PRId64 " messages on %s did not decode as rigpose.pose_t\n",
                      path.c_str(), n_bad, channel.c_str());
@@ -135,7 +142,7 @@ static bool parse_numbers(const std::string &line, char sep, std::vector<double>
 }
 
 bool load(const std::string &path, const std::string &channel, Traj *out, Traj *truth,
-          std::string *method, std::string *why)
+          std::string *method, std::string *why, bool tolerant)
 {
     out->clear();
     std::ifstream in(path, std::ios::binary);
@@ -146,7 +153,7 @@ bool load(const std::string &path, const std::string &channel, Traj *out, Traj *
     unsigned char magic[4] = {0, 0, 0, 0};
     in.read(reinterpret_cast<char *>(magic), 4);
     if (magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01) {
-        return load_lcm(path, channel, out, truth, method, why);
+        return load_lcm(path, channel, out, truth, method, tolerant, why);
     }
     in.clear();
     in.seekg(0);

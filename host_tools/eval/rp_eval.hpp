@@ -39,9 +39,12 @@ cv::Vec4d rot_to_quat(const cv::Matx33d &R);
  *  - CSV with header utime_us,tx,ty,tz,alpha,beta,gamma (truth.csv of a replay folder);
  *  - TUM: "timestamp tx ty tz qx qy qz qw" per line (seconds), '#' comments;
  *  - KITTI: 12 numbers per line (row-major [R | t]); utime = line index * 1e5 (10 Hz).
- * False with a reason (file:line) on a malformed file; never throws. */
+ * False with a reason (file:line) on a malformed file; never throws. LCM logs are read by
+ * host_tools/common/rp_lcmlog.h: a truncated or corrupt log is refused with the byte offset
+ * ("FILE: offset N: what"), or with `tolerant` read on past bad stretches, one warning line per
+ * skip on stderr. */
 bool load(const std::string &path, const std::string &channel, Traj *out, Traj *truth,
-          std::string *method, std::string *why);
+          std::string *method, std::string *why, bool tolerant = false);
 
 bool write_tum(const std::string &path, const Traj &t, std::string *why);
 bool write_kitti(const std::string &path, const Traj &t, std::string *why);

@@ -12,11 +12,12 @@ LOG_LCM := $(BUILD)/lcmgen
 LOG_HAL := $(BUILD)/platform/librigpose_hal.a
 
 LOG_CXXFLAGS = -std=c++14 -O2 -g -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EIGEN=1 $(WARN) \
-    -Iplatform/include $(INC) -isystem $(LOG_LCM)/c
-LOG_LIBS = $(LOG_HAL) $(LOG_LCM)/librigpose_lcm.a $(REL)/librigpose_sim.a $(REL)/librigpose_core.a \
+    -Iplatform/include $(INC) -Ihost_tools/common -isystem $(LOG_LCM)/c
+LOG_LIBS = $(LCMLOG_OBJ) $(LOG_HAL) $(LOG_LCM)/librigpose_lcm.a $(REL)/librigpose_sim.a $(REL)/librigpose_core.a \
     -llcm -lyaml -lpng -ljpeg -lz -lpthread -lstdc++ -lm
 
-$(LOG_BIN): host_tools/log/rigpose_log.cpp $(LOG_HAL) $(LOG_LCM)/librigpose_lcm.a \
+$(LOG_BIN): host_tools/log/rigpose_log.cpp $(LCMLOG_OBJ) $(wildcard host_tools/common/*.h) \
+            $(LOG_HAL) $(LOG_LCM)/librigpose_lcm.a \
             $(REL)/librigpose_sim.a $(REL)/librigpose_core.a $(wildcard platform/include/rigpose/*.h)
 	@mkdir -p $(@D)
 	$(CXX) $(LOG_CXXFLAGS) $< -o $@ $(LOG_LIBS)

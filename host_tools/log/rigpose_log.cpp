@@ -12,9 +12,12 @@
  *       lcm-logplayer replays. --listen URL also writes into the log every rigpose.pose_t /
  *       status_t the daemon publishes there (channels of FILE's lcm section unless given), until
  *       the daemon has been quiet for --linger-ms (500) after the last set.
- *   rigpose-log replay FILE.log --dir DIR [--config FILE] [--image-channel NAME]
+ *   rigpose-log replay FILE.log --dir DIR [--config FILE] [--image-channel NAME] [--tolerant]
  *       an LCM log's images back into a replay folder for the daemon (`rigpose --config
- *       DIR/rig.yaml`, written when --config gives the rig).
+ *       DIR/rig.yaml`, written when --config gives the rig). The log is read by
+ *       host_tools/common/rp_lcmlog.h: a truncated or corrupt log is refused with one line
+ *       "FILE: offset N: what" and nothing is written; --tolerant reads on past bad stretches
+ *       (one warning line per skip: offset and bytes skipped).
  *   rigpose-log mcap FILE.log OUT.mcap [--config FILE] [rigpose-view options]
  *       an LCM log (poses, status, images) into an MCAP file that opens in Foxglove with the
  *       live view's topics and layout: runs `rigpose-view --lcm-log FILE.log --mcap OUT.mcap`,
@@ -24,8 +27,8 @@
  * and a summary; nothing is lost silently: a set the source could not deliver (timeout, unreadable
  * image) or the recorder could not write is counted as lost and said with its reason, a camera
  * missing from a set is counted and its image column left empty. SIGINT / SIGTERM stop cleanly.
- * Exit: 0 every set recorded, 1 some sets were lost, 2 usage / configuration, 3 source or
- * output could not be opened.
+ * Exit: 0 every set recorded, 1 some sets were lost (replay: or the log is truncated / corrupt),
+ * 2 usage / configuration, 3 source or output could not be opened.
  */
 #include <limits.h>
 #include <signal.h>
@@ -49,6 +52,8 @@
 #include "rigpose/rp_config.h"
 #include "rigpose/rp_hal.h"
 #include "rigpose_image_t.h"
+#include "rp_lcm_image.h"
+#include "rp_lcmlog.h"
 
 namespace {
 
@@ -62,6 +67,7 @@ void usage(FILE *out)
                  "                          [--fast] [--listen URL] [--pose-channel NAME]\n"
                  "                          [--status-channel NAME] [--linger-ms MS] [--image-channel NAME]\n"
                  "       rigpose-log replay FILE.log --dir DIR [--config FILE] [--image-channel NAME]\n"
+                 "                          [--tolerant]\n"
                  "       rigpose-log mcap FILE.log OUT.mcap [--config FILE] [rigpose-view options]\n");
 }
 
@@ -450,6 +456,7 @@ int record(int argc, char **argv)
 int replay(int argc, char **argv)
 {
     std::string in, dir, config, image_channel = "RIGPOSE_IMAGE";
+    bool tolerant = false;
     for (int i = 2; i < argc; ++i) {
         const std::string a = argv[i];
         const bool v = i + 1 < argc;
@@ -459,6 +466,8 @@ int replay(int argc, char **argv)
             config = argv[++i];
         } else if (a == "--image-channel" && v) {
             image_channel = argv[++i];
+        } else if (a == "--tolerant") {
+            tolerant = true;
         } else if (!a.empty() && a[0] != '-' && in.empty()) {
             in = a;
         } else {
@@ -470,11 +479,14 @@ int replay(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    lcm_eventlog_t *log = lcm_eventlog_create(in.c_str(), "r");
-    if (!log) {
-        std::fprintf(stderr, "rigpose-log: cannot read %s\n", in.c_str());
+    rp_lcmlog_t log;
+    if (rp_lcmlog_open(&log, in.c_str(), tolerant) != 0) {
+        std::fprintf(stderr, "rigpose-log: %s\n", log.err);
+        rp_lcmlog_close(&log);
         return 3;
     }
+    log.warn = stderr;
+    log.prog = "rigpose-log";
     /* sets by seq: each camera's image (packed rows) */
     struct Img {
         int w = 0, h = 0;
@@ -483,29 +495,39 @@ int replay(int argc, char **argv)
     std::map<int32_t, std::pair<int64_t, std::map<int, Img>>> sets;
     int n_cams = 0;
     int64_t bad = 0;
-    while (lcm_eventlog_event_t *ev = lcm_eventlog_read_next_event(log)) {
-        if (image_channel == ev->channel) {
-            rigpose_image_t m;
-            if (rigpose_image_t_decode(ev->data, 0, static_cast<int>(ev->datalen), &m) < 0 ||
-                m.width <= 0 || m.height <= 0 || m.size != static_cast<int32_t>(m.width) * m.height ||
-                m.cam < 0 || m.cam >= RP_MAX_CAMS) {
-                ++bad;
-            } else {
-                auto &s = sets[m.seq];
-                if (s.second.empty()) {
-                    s.first = ev->timestamp;
-                }
-                Img &im = s.second[m.cam];
-                im.w = m.width;
-                im.h = m.height;
-                im.px.assign(m.data, m.data + m.size);
-                n_cams = std::max(n_cams, m.cam + 1);
-                rigpose_image_t_decode_cleanup(&m);
-            }
+    rp_lcmlog_event_t ev;
+    int r;
+    while ((r = rp_lcmlog_next(&log, &ev)) > 0) {
+        if (image_channel != ev.channel) {
+            continue;
         }
-        lcm_eventlog_free_event(ev);
+        rigpose_image_t m;
+        if (rp_image_t_decode_checked(ev.data, static_cast<int>(ev.datalen), &m) < 0) {
+            ++bad;
+            continue;
+        }
+        if (m.width <= 0 || m.height <= 0 || m.size != static_cast<int32_t>(m.width) * m.height ||
+            m.cam < 0 || m.cam >= RP_MAX_CAMS) {
+            ++bad;
+        } else {
+            auto &s = sets[m.seq];
+            if (s.second.empty()) {
+                s.first = ev.timestamp;
+            }
+            Img &im = s.second[m.cam];
+            im.w = m.width;
+            im.h = m.height;
+            im.px.assign(m.data, m.data + m.size);
+            n_cams = std::max(n_cams, m.cam + 1);
+        }
+        rigpose_image_t_decode_cleanup(&m);
     }
-    lcm_eventlog_destroy(log);
+    if (r < 0) { /* truncated or corrupt: nothing written (--tolerant reads on) */
+        std::fprintf(stderr, "rigpose-log: %s\n", log.err);
+        rp_lcmlog_close(&log);
+        return 1;
+    }
+    rp_lcmlog_close(&log);
     if (bad) {
         std::fprintf(stderr, "rigpose-log: %s: %" PRId64 " messages on %s are not valid images\n",
                      in.c_str(), bad, image_channel.c_str());

@@ -5,7 +5,11 @@ Subscribes to the daemon's pose, status and (when on) image channels and either 
 live over Foxglove's WebSocket protocol on this machine only (127.0.0.1; open
 ws://127.0.0.1:8765 in Foxglove) or, with --mcap FILE, writes them to an MCAP file. With
 --lcm-log FILE it reads a recorded LCM log (lcm-logger, `rigpose-log record --log`, the daemon's
-file:// URL) instead of subscribing: the recording becomes an MCAP with the same topics.
+file:// URL) instead of subscribing: the recording becomes an MCAP with the same topics. The log
+is read by host_tools/common/rp_lcmlog.py (the checks of rigpose-eval's and rigpose-log's reader;
+PyPI lcm's EventLog dies with SIGSEGV on a data length of 0x7fffffff): a truncated or corrupt log
+is refused with one line "FILE: offset N: what", exit 1, no MCAP written; --tolerant skips the bad
+stretches, one warning line each.
 
 Topics (Foxglove's well-known schemas, host_tools/view/README.md):
   /tf                       foxglove.FrameTransform   world -> cam1 (the pose); cam1 -> camK (rig)
@@ -33,6 +37,9 @@ from foxglove.channels import (FrameTransformChannel, ImageAnnotationsChannel,
                                PoseInFrameChannel, PosesInFrameChannel, RawImageChannel,
                                SceneUpdateChannel)
 import lcm
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+import rp_lcmlog  # noqa: E402  (host_tools/common/, beside this tool's folder)
 
 try:
     from rigpose import features_t, image_t, pose_t, status_t
@@ -282,6 +289,8 @@ def main(argv=None):
     ap.add_argument("--port", type=int, default=8765, help="WebSocket port on 127.0.0.1")
     ap.add_argument("--mcap", metavar="FILE", help="write an MCAP file instead of serving")
     ap.add_argument("--lcm-log", metavar="FILE", help="read a recorded LCM log, not the network")
+    ap.add_argument("--tolerant", action="store_true",
+                    help="--lcm-log: skip truncated / corrupt stretches (warned) instead of refusing")
     ap.add_argument("--poses", type=int, default=0, help="stop after this many poses (0: never)")
     ap.add_argument("--idle", type=float, default=0.0,
                     help="stop when nothing arrived for this many seconds after the first pose")
@@ -293,6 +302,12 @@ def main(argv=None):
 
     if a.lcm_log and not a.mcap:
         ap.error("--lcm-log needs --mcap FILE")
+    if a.lcm_log and not a.tolerant:  # before the MCAP is created: a corrupt log writes nothing
+        try:
+            rp_lcmlog.check(a.lcm_log)
+        except (rp_lcmlog.LogError, OSError) as e:
+            print("rigpose-view: %s" % e, file=sys.stderr)
+            return 1
     foxglove.set_log_level("WARN")
     rig = load_rig(a.config) if a.config else None
     say = (lambda *x: None) if a.quiet else (lambda *x: print(*x, flush=True))
@@ -319,12 +334,16 @@ def main(argv=None):
             view.on_features(data, t_ns)
 
     if a.lcm_log:
-        log = lcm.EventLog(a.lcm_log, "r")
-        for ev in log:
-            dispatch(ev.channel, ev.data, ev.timestamp * 1000)
-            if a.poses and view.n_poses >= a.poses:
-                break
-        log.close()
+        try:
+            for _, _, utime, channel, data in rp_lcmlog.events(a.lcm_log, a.tolerant, sys.stderr,
+                                                              "rigpose-view"):
+                dispatch(channel, data, utime * 1000)
+                if a.poses and view.n_poses >= a.poses:
+                    break
+        except (rp_lcmlog.LogError, OSError) as e:  # the file changed after the check
+            print("rigpose-view: %s" % e, file=sys.stderr)
+            sink.close()
+            return 1
     else:
         stop = [False]
 
