@@ -144,16 +144,22 @@ static void test_embedded_default_is_the_simulated_rig(void **state)
     assert_string_equal(g_cfg.instance, ""); /* the daemon's HOST:PID */
 }
 
+/* The file at path into buf (cap bytes), NUL-terminated; fails the test if it cannot be read. */
+static void read_text(const char *path, char *buf, size_t cap)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    const size_t n = fread(buf, 1, cap - 1, f);
+    fclose(f);
+    buf[n] = '\0';
+}
+
 /* source.sim.motion (paper, turn, pitch; another word refused naming it) and lcm.instance. */
 static void test_sim_motion_and_instance(void **state)
 {
     (void)state;
     static char text[16384];
-    FILE *f = fopen("config/sim.yaml", "r");
-    assert_non_null(f);
-    const size_t n = fread(text, 1, sizeof text - 1, f);
-    fclose(f);
-    text[n] = '\0';
+    read_text("config/sim.yaml", text, sizeof text);
     static const char *const words[4] = {"paper", "turn", "pitch", "spin"};
     for (int w = 0; w < 4; ++w) {
         static char edited_text[16640];
@@ -953,11 +959,7 @@ static void test_readme_lists_the_core_defaults(void **state)
 {
     (void)state;
     static char readme[65536];
-    FILE *f = fopen("config/README.md", "rb");
-    assert_non_null(f);
-    const size_t n = fread(readme, 1, sizeof readme - 1, f);
-    fclose(f);
-    readme[n] = '\0';
+    read_text("config/README.md", readme, sizeof readme);
 #define E RP_PIPE_LAYOUT_COUNT_ /* end of a list */
     static const rp_pipe_layout_t est_layouts[3][5] = {
         {RP_PIPE_STEREO4, RP_PIPE_STEREO2, E, E, E},
