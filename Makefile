@@ -122,6 +122,11 @@ HOST_TEST_BINS := $(foreach v,$(VARIANTS),$(addprefix $(BUILD)/$(v)/tests/,$(TES
 REL := $(BUILD)/release
 $(eval $(call CORE_LIB,release,$(REL),$(CC),$(CXX),-O2 -g -DNDEBUG -DRP_REAL_IS_FLOAT=0 -DRP_LINALG_EIGEN=1,ar))
 
+# ThreadSanitizer build of the core (double, Eigen) for the threaded daemon's test
+# (daemon/daemon.mk: test_threads): the trackers run on the pool's threads.
+TSAN := -fsanitize=thread
+$(eval $(call CORE_LIB,tsan,$(BUILD)/tsan,$(CC),$(CXX),-O1 -g $(TSAN) $(VDEF_double-eigen),ar))
+
 # The fast tier: the unit tests of one variant (double, Eigen), no sanitizer, -O1.
 CHK := $(BUILD)/check
 $(eval $(call CORE_LIB,check,$(CHK),$(CC),$(CXX),-O1 -g $(VDEF_double-eigen),ar))

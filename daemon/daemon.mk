@@ -88,6 +88,16 @@ $(DMN)/$(1)/test_publish: daemon/tests/test_publish.c daemon/rp_publish.c daemon
 endef
 $(foreach v,$(DMN_VARIANTS),$(eval $(call DMN_TEST,$(v))))
 
+# The threads of the daemon (the pool, the HAL's per-camera decoding, the trackers on the
+# pool: identical estimates on 1..4 threads) under ThreadSanitizer: core, simulator, HAL and the
+# daemon's estimator all built with -fsanitize=thread.
+$(DMN)/tsan/test_threads: daemon/tests/test_threads.c daemon/rp_est.c $(wildcard platform/src/*.c)                           $(DMN_HDRS) tests/rp_test.h tests/img_fixture.h                           $(BUILD)/tsan/librigpose_sim.a $(BUILD)/tsan/librigpose_core.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CSTD) $(WARN) -Wno-format-truncation -D_DEFAULT_SOURCE $(DMN_INC) -Itests -O1 -g \
+	    $(TSAN) $(VDEF_double-eigen) daemon/tests/test_threads.c daemon/rp_est.c \
+	    $(wildcard platform/src/*.c) $(BUILD)/tsan/librigpose_sim.a \
+	    $(BUILD)/tsan/librigpose_core.a -o $@ $(TSAN) -lcmocka $(HAL_LIBS) -lstdc++ -lm
+
 # The LCM test runs the release daemon and Python; its wrapper passes this build's folder.
 $(DMN)/run_test_lcm: daemon/tests/test_lcm.sh daemon/tests/lcm_sub.py
 	@mkdir -p $(dir $@)
@@ -100,6 +110,13 @@ $(DMN)/run_test_blank: daemon/tests/test_blank.sh
 	printf '#!/bin/sh\nexec %s/daemon/tests/test_blank.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
 	chmod +x $@
 
+# The release daemon's poses on 1, 2 and 4 threads, bit for bit (rendered replay, file:// logs).
+$(DMN)/run_test_threads: daemon/tests/test_threads.sh daemon/tests/pose_log_diff.py \
+                         daemon/tests/rig_subset.py
+	@mkdir -p $(dir $@)
+	printf '#!/bin/sh\nexec %s/daemon/tests/test_threads.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
+	chmod +x $@
+
 # Every failure class of the release daemon (exit codes, messages naming file / camera), on
 # replay folders it writes; LCM on memq:// only, so it runs in parallel with the others.
 $(DMN)/run_test_failures: daemon/tests/test_failures.sh
@@ -109,11 +126,12 @@ $(DMN)/run_test_failures: daemon/tests/test_failures.sh
 
 DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est \
                                      $(DMN)/$(v)/test_args $(DMN)/$(v)/test_publish \
-                                     $(DMN)/$(v)/test_stats)
-HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm $(DMN)/run_test_blank $(DMN)/run_test_failures
+                                     $(DMN)/$(v)/test_stats) $(DMN)/tsan/test_threads
+HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm $(DMN)/run_test_blank $(DMN)/run_test_failures \
+                    $(DMN)/run_test_threads
 SERIAL_TESTS += $(DMN)/run_test_lcm
 test: $(DMN_TESTS) $(DMN)/run_test_lcm $(DMN)/run_test_blank $(DMN)/run_test_failures \
-      $(REL)/rigpose $(REL)/rigpose-render $(DMN_LCM)/stamp
+      $(DMN)/run_test_threads $(REL)/rigpose $(REL)/rigpose-render $(DMN_LCM)/stamp
 
 # ---- benchmark -----------------------------------------------------------------------------------
 # 300 simulated frame sets as fast as the daemon takes them, published on udpm (ttl=0: this host).

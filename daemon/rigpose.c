@@ -565,6 +565,7 @@ int main(int argc, char **argv)
     lcm_t *lcm = lcm_create(g_cfg.lcm_url);
     if (lcm == NULL) {
         fprintf(stderr, "rigpose: LCM: cannot use '%s'\n", g_cfg.lcm_url);
+        rp_est_close(&g_est);
         return EXIT_LCM;
     }
     instance_init(g_cfg.instance);
@@ -576,8 +577,11 @@ int main(int argc, char **argv)
     }
 
     rp_hal_source_t *src = NULL;
+    g_cfg.hal.run_jobs = rp_est_hal_jobs; /* each camera's image decoded on the same threads */
+    g_cfg.hal.run_jobs_ctx = &g_est;
     if (source_open(&g_cfg, &src) != RP_HAL_OK) {
         lcm_destroy(lcm);
+        rp_est_close(&g_est);
         return EXIT_SOURCE;
     }
 
@@ -591,11 +595,13 @@ int main(int argc, char **argv)
     sigaction(SIGPIPE, &sa, NULL); /* stdout piped into a reader that quit: the same, the
                                     * summary on stderr (main) */
 
-    printf("rigpose: %s: instance '%.32s', source %s, %u cameras, method %s, LCM %s (%s, %s)\n",
+    printf("rigpose: %s: instance '%.32s', source %s, %u cameras, method %s, %u thread%s, "
+           "LCM %s (%s, %s)\n",
            o.config, (const char *)g_instance,
            g_cfg.hal.kind == RP_HAL_SRC_SIM ? "sim" : g_cfg.hal.kind == RP_HAL_SRC_V4L2 ? "v4l2"
                                                                                      : "replay",
-           g_cfg.rig.n_cams, method_name(&g_cfg), g_cfg.lcm_url, g_cfg.pose_channel,
+           g_cfg.rig.n_cams, method_name(&g_cfg), rp_est_threads(&g_est),
+           rp_est_threads(&g_est) == 1 ? "" : "s", g_cfg.lcm_url, g_cfg.pose_channel,
            g_cfg.status_channel);
     if (!o.quiet) {
         print_header();
@@ -607,6 +613,7 @@ int main(int argc, char **argv)
     const int exit_code = run(&o, src, lcm);
 
     source_close(src);
+    rp_est_close(&g_est);
     lcm_destroy(lcm);
     if (g_n_grab_failed > 0 || g_n_degraded > 0) {
         fprintf(stderr, "rigpose: camera source: %u failed grabs (%u of them timeouts), %u sets "

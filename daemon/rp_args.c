@@ -23,6 +23,8 @@ void rp_args_usage(FILE *f)
             "  --quiet               print no poses: only events (failures, changes) and the summary\n"
             "  --image-channel NAME  also publish every camera image (rigpose.image_t) there\n"
             "  --stats-json FILE     write daemon_latency_ms_p50/_p99 and daemon_fps to FILE\n"
+            "  --threads N           override threads (1..16; 0: one per online core, at most\n"
+            "                        one per camera); the poses are the same for every N\n"
             "exit codes: 0 done, 1 usage, 2 bad configuration, 3 LCM, 4 source open/start,\n"
             "            5 estimator setup, 6 source failed while running, 7 --stats-json not\n"
             "            written\n");
@@ -49,6 +51,7 @@ rp_args_status_t rp_args_parse(int argc, char **argv, rp_args_t *o, FILE *err)
     memset(o, 0, sizeof *o);
     o->drop_cam = -2;
     o->print_every = 1;
+    o->threads = -1;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -87,6 +90,15 @@ rp_args_status_t rp_args_parse(int argc, char **argv, rp_args_t *o, FILE *err)
                 fprintf(err, "rigpose: --print-every: '%s' is not a positive count\n", v);
                 return RP_ARGS_E_USAGE;
             }
+            ++i;
+        } else if (strcmp(a, "--threads") == 0) {
+            uint32_t n = 0;
+            if (parse_u32(v, &n) != 0 || n > RP_POOL_MAX_THREADS) {
+                fprintf(err, "rigpose: --threads: '%s' is not a count 0..%d\n", v,
+                        RP_POOL_MAX_THREADS);
+                return RP_ARGS_E_USAGE;
+            }
+            o->threads = (int)n;
             ++i;
         } else if (strcmp(a, "--stats-json") == 0) {
             o->stats_json = v;
@@ -137,6 +149,9 @@ rp_args_status_t rp_args_apply(const rp_args_t *o, rp_config_t *cfg, FILE *err)
     }
     if (o->fast) {
         cfg->hal.realtime = 0;
+    }
+    if (o->threads >= 0) {
+        cfg->threads = (uint8_t)o->threads;
     }
     if (o->drop_cam >= 0) {
         if (o->drop_cam >= cfg->rig.n_cams) {

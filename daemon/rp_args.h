@@ -30,6 +30,7 @@ typedef struct {
     int quiet;                  /* --quiet: no pose lines, only the summary */
     uint32_t print_every;       /* --print-every K, >= 1 */
     const char *stats_json;     /* --stats-json FILE, NULL: none */
+    int threads;                /* --threads N (cfg->threads), -1: not given */
 } rp_args_t;
 
 /* The usage text (every option and the exit codes) on f. */
@@ -40,7 +41,7 @@ void rp_args_usage(FILE *f);
  * missing or malformed value, or no --config. */
 rp_args_status_t rp_args_parse(int argc, char **argv, rp_args_t *a, FILE *err);
 
-/* Lay a's overrides over cfg: LCM URL and channels, --fast (cfg->hal.realtime = 0),
+/* Lay a's overrides over cfg: LCM URL and channels, --fast (cfg->hal.realtime = 0), --threads,
  * --sim-drop (cfg->sim), and the sim source's run length when the file leaves it open
  * (--frames, else 300). RP_ARGS_E_USAGE (message on err) for a string too long for its field or
  * a --sim-drop camera the rig does not have; cfg may then be partly changed. */

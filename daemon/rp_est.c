@@ -1,17 +1,65 @@
 /*
- * rp_est.c - the configured estimator: configuration -> rp_pipe (rp_est.h). The pipeline's
- * configuration is the parser's (rp_config.h: the core's defaults with the file's keys) as it is.
+ * rp_est.c - the configured estimator: configuration -> rp_pipe, its trackers on a pool of
+ * threads (rp_est.h). The pipeline's configuration is the parser's (rp_config.h: the core's
+ * defaults with the file's keys) as it is.
  */
 #include "rp_est.h"
 
 #include <string.h>
+
+unsigned rp_est_threads_for(const rp_config_t *cfg, unsigned online_cores)
+{
+    if (cfg == NULL) {
+        return 1;
+    }
+    if (cfg->threads > 0) {
+        return cfg->threads <= RP_POOL_MAX_THREADS ? cfg->threads : RP_POOL_MAX_THREADS;
+    }
+    /* one per tracker: stereo layouts track both cameras of each pair, gc and rc their
+     * cameras, camK one */
+    const rp_pipe_layout_t l = cfg->pipe.layout;
+    unsigned cams = l == RP_PIPE_STEREO4 ? 4u
+                    : l == RP_PIPE_STEREO2 ? 2u
+                    : l == RP_PIPE_GC      ? cfg->pipe.gc.n_cams
+                    : l == RP_PIPE_RC      ? (unsigned)RP_RC_MAX_CAMS
+                                           : 1u;
+    unsigned n = online_cores < cams ? online_cores : cams;
+    return n < 1 ? 1u : n > RP_POOL_MAX_THREADS ? RP_POOL_MAX_THREADS : n;
+}
 
 rp_status_t rp_est_init(rp_est_t *est, const rp_config_t *cfg)
 {
     if (est == NULL || cfg == NULL) {
         return RP_E_ARG;
     }
-    return rp_pipe_init(&est->pipe, &cfg->rig, &cfg->pipe);
+    rp_est_close(est);
+    const rp_status_t st = rp_pipe_init(&est->pipe, &cfg->rig, &cfg->pipe);
+    if (st != RP_OK) {
+        return st;
+    }
+    return rp_pool_start(&est->pool, rp_est_threads_for(cfg, rp_pool_online_cores()));
+}
+
+void rp_est_close(rp_est_t *est)
+{
+    if (est != NULL) {
+        rp_pool_stop(&est->pool);
+    }
+}
+
+unsigned rp_est_threads(const rp_est_t *est)
+{
+    const unsigned n = est != NULL ? rp_pool_threads(&est->pool) : 0;
+    return n > 0 ? n : 1;
+}
+
+int rp_est_hal_jobs(void *ctx, unsigned n_jobs, void (*fn)(void *arg, unsigned job), void *arg)
+{
+    rp_est_t *est = (rp_est_t *)ctx;
+    if (est == NULL || fn == NULL) {
+        return -1;
+    }
+    return rp_pool_run(&est->pool, n_jobs, fn, arg) == RP_OK ? 0 : -1;
 }
 
 rp_status_t rp_est_step(rp_est_t *est, const rp_frameset_t *fs, rp_estimate_t *out)
@@ -26,6 +74,15 @@ rp_status_t rp_est_step(rp_est_t *est, const rp_frameset_t *fs, rp_estimate_t *o
     return rp_pipe_step_feats(&est->pipe, fs, out);
 }
 
+/* Job t of a set: tracker t on its camera's image. */
+static void track_job(void *arg, unsigned t)
+{
+    rp_est_t *est = (rp_est_t *)arg;
+    /* ignored: RP_E_ARG only for a step not begun or t out of range, which the caller rules
+     * out; the tracker's own outcome is in the pipeline's report */
+    (void)rp_pipe_track(&est->pipe, (uint8_t)t, est->images, est->n_images);
+}
+
 rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], uint8_t n,
                                int64_t utime, rp_estimate_t *out, const rp_frameset_t **fs_out)
 {
@@ -33,9 +90,29 @@ rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], 
         *fs_out = NULL;
     }
     if (est == NULL) {
+        if (out != NULL) {
+            memset(out, 0, sizeof *out);
+            out->flags = RP_EST_LOST;
+        }
         return RP_E_ARG;
     }
-    const rp_status_t st = rp_pipe_step(&est->pipe, images, n, utime, out);
+    rp_status_t st;
+    if (rp_pool_threads(&est->pool) <= 1 || images == NULL || n > RP_MAX_CAMS || out == NULL) {
+        st = rp_pipe_step(&est->pipe, images, n, utime, out); /* its argument checks */
+    } else {
+        st = rp_pipe_begin(&est->pipe, utime, out); /* fills out on failure */
+        if (st == RP_OK) {
+            est->images = images;
+            est->n_images = n;
+            if (rp_pool_run(&est->pool, rp_pipe_n_trackers(&est->pipe), track_job, est) ==
+                RP_OK) {
+                /* ignored: RP_E_ARG only for a step not begun; rp_pipe_estimate then says so */
+                (void)rp_pipe_match(&est->pipe);
+            }
+            est->images = NULL;
+            st = rp_pipe_estimate(&est->pipe, out); /* RP_E_ARG, out LOST, if not matched */
+        }
+    }
     if (fs_out != NULL && rp_pipe_frameset(&est->pipe, fs_out) != RP_OK) {
         *fs_out = NULL;
     }

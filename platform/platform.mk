@@ -19,7 +19,7 @@ HAL_H := $(wildcard platform/include/rigpose/*.h platform/src/*.h core/include/r
                     platform/sim/*.h)
 HAL_INC := -Iplatform/include $(INC)
 HAL_CFLAGS := $(CSTD) $(CORE_WARN) -Wno-format-truncation -D_DEFAULT_SOURCE $(HAL_INC) $(VDEF_double-eigen)
-HAL_LIBS := -lyaml -lpng -ljpeg -lz
+HAL_LIBS := -lyaml -lpng -ljpeg -lz -lpthread
 HAL_LIB := $(PLAT)/librigpose_hal.a
 HAL_SAN_LIB := $(PLAT)/san/librigpose_hal.a
 

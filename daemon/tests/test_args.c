@@ -41,12 +41,13 @@ static void test_defaults_and_every_option(void **state)
     assert_null(a.lcm_url);
     assert_null(a.stats_json);
     assert_false(a.fast || a.quiet);
+    assert_int_equal(a.threads, -1); /* the file's */
 
     const char *const all[] = {"rigpose", "--frames", "12", "--lcm-url", "memq://",
                                "--pose-channel", "P", "--status-channel", "S",
                                "--image-channel", "I", "--fast", "--sim-drop", "2:40",
                                "--print-every", "5", "--quiet", "--stats-json", "s.json",
-                               "--config", "c.yaml", NULL};
+                               "--threads", "3", "--config", "c.yaml", NULL};
     assert_int_equal(parse(&a, all), RP_ARGS_OK);
     assert_int_equal(a.frames, 12);
     assert_string_equal(a.lcm_url, "memq://");
@@ -58,6 +59,7 @@ static void test_defaults_and_every_option(void **state)
     assert_int_equal(a.drop_from, 40);
     assert_int_equal(a.print_every, 5);
     assert_string_equal(a.stats_json, "s.json");
+    assert_int_equal(a.threads, 3);
     assert_string_equal(a.config, "c.yaml");
     assert_string_equal(g_err, "");
 
@@ -82,6 +84,8 @@ static void test_bad_command_lines_name_the_option(void **state)
         {{"rigpose", "--config", "c", "--sim-drop", "1:2:3", NULL}, "--sim-drop: '1:2:3'"},
         {{"rigpose", "--config", "c", "--sim-drop", "1", NULL}, "--sim-drop: '1'"},
         {{"rigpose", "--config", "c", "--bogus", "1", NULL}, "--bogus: unknown option"},
+        {{"rigpose", "--config", "c", "--threads", "17", NULL}, "--threads: '17' is not a count"},
+        {{"rigpose", "--config", "c", "--threads", "-1", NULL}, "--threads: '-1' is not a count"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         rp_args_t a;
@@ -119,7 +123,8 @@ static void test_overrides_land_in_the_configuration(void **state)
     rp_args_t a;
     const char *const all[] = {"rigpose", "--config", "config/sim.yaml", "--lcm-url", "memq://",
                                "--pose-channel", "P", "--status-channel", "S", "--image-channel",
-                               "I", "--fast", "--sim-drop", "5:7", "--frames", "40", NULL};
+                               "I", "--fast", "--sim-drop", "5:7", "--frames", "40", "--threads",
+                               "2", NULL};
     assert_int_equal(parse(&a, all), RP_ARGS_OK);
     load_default();
     g_cfg.hal.realtime = 1;
@@ -133,6 +138,7 @@ static void test_overrides_land_in_the_configuration(void **state)
     assert_int_equal(g_cfg.sim.drop_cam, 5);
     assert_int_equal(g_cfg.sim.drop_from, 7);
     assert_int_equal(g_cfg.hal.sim_frames, 40);
+    assert_int_equal(g_cfg.threads, 2);
 
     /* The file's run length stays; with neither, 300. */
     const char *const min[] = {"rigpose", "--config", "config/sim.yaml", NULL};

@@ -1083,7 +1083,7 @@ static int parse_lcm(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 static rp_cfg_status_t parse_doc(ctx_t *c, rp_config_t *cfg)
 {
     static const char *const known[] = {"version", "source", "cameras", "estimator",
-                                        "tracker", "lcm",    "meta",    NULL};
+                                        "tracker", "lcm",    "meta",    "threads", NULL};
     const yaml_node_t *root = yaml_document_get_root_node(c->doc);
     if (root == NULL) {
         /* ignored: it returns the status it was given: here only the message is wanted */
@@ -1096,12 +1096,14 @@ static rp_cfg_status_t parse_doc(ctx_t *c, rp_config_t *cfg)
                    node_kind(root));
         return c->st;
     }
-    long long version;
+    long long version, threads;
     if (check_keys(c, root, "", known) || get_int(c, root, "", "version", 1, 0, 1, 1, &version) ||
+        get_int(c, root, "", "threads", 0, 0, 0, RP_POOL_MAX_THREADS, &threads) ||
         parse_cameras(c, root, cfg) || parse_source(c, root, cfg) ||
         parse_estimator(c, root, cfg) || parse_tracker(c, root, cfg) || parse_lcm(c, root, cfg)) {
         return c->st;
     }
+    cfg->threads = (uint8_t)threads;
     return RP_CFG_OK;
 }
 

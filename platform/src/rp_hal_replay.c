@@ -68,7 +68,12 @@ typedef struct {
     uint8_t have_ready;
     char ready_msg[RP_HAL_ERR_MAX]; /* why cameras of the ready set are missing ("" if none) */
     char buf[LINE_MAX_CHARS];
-    char path[2 * RP_HAL_PATH_MAX];
+    /* Each camera's image of the row being read: its column's text, path, outcome and message
+     * (one camera's load touches only its own entries: cameras may load in parallel jobs). */
+    const char *rel[RP_MAX_CAMS];
+    char path[RP_MAX_CAMS][2 * RP_HAL_PATH_MAX];
+    rp_hal_status_t load_st[RP_MAX_CAMS];
+    char load_err[RP_MAX_CAMS][RP_HAL_ERR_MAX];
     uint8_t n_cols;              /* image columns in frames.csv */
     uint8_t col[RP_MAX_CAMS];    /* camera i's image column */
     uint16_t w[RP_MAX_CAMS], h[RP_MAX_CAMS];
@@ -322,21 +327,25 @@ static const char *read_png(FILE *f, uint8_t *dst, uint16_t *w, uint16_t *h)
 }
 
 /* One image (PNG or PGM, told apart by their first bytes) into the camera's buffer. Messages
- * name frames.csv's line, the camera, the file and what is wrong. */
+ * (in the camera's own load_err) name frames.csv's line, the camera, the file and what is
+ * wrong. */
 static rp_hal_status_t load_image(replay_src_t *s, uint8_t cam, const char *rel)
 {
-    const int n = rel[0] == '/' ? snprintf(s->path, sizeof s->path, "%s", rel)
-                                : snprintf(s->path, sizeof s->path, "%s/%s", s->dir, rel);
-    if (n < 0 || (size_t)n >= sizeof s->path || rel[0] == '\0') {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: camera %u: %s path",
+    char *path = s->path[cam];
+    char *err = s->load_err[cam];
+    const size_t cap = sizeof s->path[cam];
+    const int n = rel[0] == '/' ? snprintf(path, cap, "%s", rel)
+                                : snprintf(path, cap, "%s/%s", s->dir, rel);
+    if (n < 0 || (size_t)n >= cap || rel[0] == '\0') {
+        return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: camera %u: %s path",
                            s->index, (unsigned)s->line, (unsigned)cam,
                            rel[0] == '\0' ? "empty" : "too long a");
     }
     const char *why = NULL;
-    FILE *f = open_regular(s->path, &why);
+    FILE *f = open_regular(path, &why);
     if (f == NULL) {
-        return rp_hal_fail(s->err, RP_HAL_E_OPEN, "%s:%u: camera %u: %s: %s", s->index,
-                           (unsigned)s->line, (unsigned)cam, s->path, why);
+        return rp_hal_fail(err, RP_HAL_E_OPEN, "%s:%u: camera %u: %s: %s", s->index,
+                           (unsigned)s->line, (unsigned)cam, path, why);
     }
     unsigned char magic[4] = {0, 0, 0, 0};
     const size_t got = fread(magic, 1, 4, f);
@@ -348,17 +357,24 @@ static rp_hal_status_t load_image(replay_src_t *s, uint8_t cam, const char *rel)
     }
     fclose(f);
     if (why != NULL) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: camera %u: %s: %s", s->index,
-                           (unsigned)s->line, (unsigned)cam, s->path, why);
+        return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: camera %u: %s: %s", s->index,
+                           (unsigned)s->line, (unsigned)cam, path, why);
     }
     const rp_hal_cam_cfg_t *cc = &s->cfg.cam[cam];
     if (cc->w != 0 && (s->w[cam] != cc->w || s->h[cam] != cc->h)) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+        return rp_hal_fail(err, RP_HAL_E_FORMAT,
                            "%s:%u: camera %u: %s: %ux%u, configured %ux%u", s->index,
-                           (unsigned)s->line, (unsigned)cam, s->path, (unsigned)s->w[cam],
+                           (unsigned)s->line, (unsigned)cam, path, (unsigned)s->w[cam],
                            (unsigned)s->h[cam], (unsigned)cc->w, (unsigned)cc->h);
     }
     return RP_HAL_OK;
+}
+
+/* Job `cam` of a row (rp_hal_cfg_t.run_jobs): that camera's image. */
+static void load_job(void *arg, unsigned cam)
+{
+    replay_src_t *s = (replay_src_t *)arg;
+    s->load_st[cam] = load_image(s, (uint8_t)cam, s->rel[cam]);
 }
 
 static void replay_close(void *ctx)
@@ -583,11 +599,19 @@ static rp_hal_status_t read_row(replay_src_t *s)
     rp_hal_status_t first_bad = RP_HAL_OK;
     s->ready_msg[0] = '\0';
     for (uint8_t i = 0; i < n; i++) {
-        const rp_hal_status_t st = load_image(s, i, f[s->col[i] + 1]);
+        s->rel[i] = f[s->col[i] + 1];
+    }
+    if (s->cfg.run_jobs == NULL || s->cfg.run_jobs(s->cfg.run_jobs_ctx, n, load_job, s) != 0) {
+        for (uint8_t i = 0; i < n; i++) {
+            load_job(s, i);
+        }
+    }
+    for (uint8_t i = 0; i < n; i++) { /* in camera order: the first failure is the message */
+        const rp_hal_status_t st = s->load_st[i];
         ok[i] = st == RP_HAL_OK;
         if (st != RP_HAL_OK && n_bad++ == 0) {
             first_bad = st;
-            memcpy(s->ready_msg, s->err, RP_HAL_ERR_MAX);
+            memcpy(s->ready_msg, s->load_err[i], RP_HAL_ERR_MAX);
         }
     }
     if (n_bad == n || (n_bad > 0 && !s->cfg.partial_sets)) { /* the row fails (first reason) */

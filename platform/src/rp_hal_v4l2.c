@@ -218,6 +218,11 @@ typedef struct {
     int out_idx;                  /* buffer of the last delivered set (-1: none), given back
                                    * at the next grab */
     uint8_t dropped;              /* frames skipped since the last delivered set */
+    /* the frame being delivered (fill_set): its buffer, bytes, and the conversion's outcome */
+    const uint8_t *conv_p;
+    size_t conv_used;
+    rp_hal_frame_t *conv_out;
+    rp_hal_status_t conv_st;
     uint8_t grey[(size_t)RP_HAL_MAX_W * RP_HAL_MAX_H]; /* converted image (non-grey formats) */
 } v4l2_cam_t;
 
@@ -666,13 +671,29 @@ static rp_hal_status_t v4l2_stop(void *ctx)
     return RP_HAL_OK;
 }
 
+/* Job `k` of a set (rp_hal_cfg_t.run_jobs): the k-th picked camera's frame to grey. */
+typedef struct {
+    v4l2_src_t *s;
+    uint8_t cams[RP_MAX_CAMS]; /* the cameras with a picked frame */
+} conv_jobs_t;
+
+static void conv_job(void *arg, unsigned k)
+{
+    const conv_jobs_t *j = (const conv_jobs_t *)arg;
+    v4l2_cam_t *c = &j->s->cam[j->cams[k]];
+    c->conv_st = cam_image(c, c->conv_p, c->conv_used, &c->conv_out->img);
+}
+
 /* The set of the picked frames (rp_hal_group): each camera's picked frame is delivered (held
  * until the next grab), its older frames go back to the driver; a camera without a pick gives
- * back the frames older than the set's window. */
+ * back the frames older than the set's window. The picked frames are converted to grey after
+ * the picking, one job per camera (in parallel with cfg.run_jobs). */
 static void fill_set(v4l2_src_t *s, rp_hal_set_t *set, const int8_t pick[], int64_t anchor)
 {
     rp_hal_set_clear(set, s->cfg.n_cams);
-    uint8_t first = 1;
+    conv_jobs_t jobs;
+    jobs.s = s;
+    unsigned n_conv = 0;
     for (uint8_t i = 0; i < s->cfg.n_cams; i++) {
         v4l2_cam_t *c = &s->cam[i];
         rp_hal_frame_t *f = &set->cam[i];
@@ -695,13 +716,26 @@ static void fill_set(v4l2_src_t *s, rp_hal_set_t *set, const int8_t pick[], int6
         const uint32_t idx = c->held[0].idx;
         f->utime = c->held[0].t_us;
         f->seq = c->held[0].seq;
-        const rp_hal_status_t st = cam_image(c, (const uint8_t *)c->buf[idx], c->held[0].used,
-                                             &f->img);
+        c->conv_p = (const uint8_t *)c->buf[idx];
+        c->conv_used = c->held[0].used;
+        c->conv_out = f;
+        jobs.cams[n_conv++] = i;
         memmove(c->held, c->held + 1, (size_t)(c->n_held - 1) * sizeof c->held[0]);
         c->n_held--;
         c->out_idx = (int)idx;
         c->rejoining = 0;
-        if (st != RP_HAL_OK) { /* short or corrupt frame: this set goes without it */
+    }
+    if (s->cfg.run_jobs == NULL ||
+        s->cfg.run_jobs(s->cfg.run_jobs_ctx, n_conv, conv_job, &jobs) != 0) {
+        for (unsigned k = 0; k < n_conv; k++) {
+            conv_job(&jobs, k);
+        }
+    }
+    uint8_t first = 1;
+    for (unsigned k = 0; k < n_conv; k++) {
+        v4l2_cam_t *c = &s->cam[jobs.cams[k]];
+        rp_hal_frame_t *f = c->conv_out;
+        if (c->conv_st != RP_HAL_OK) { /* short or corrupt frame: this set goes without it */
             f->flags = RP_HAL_CAM_MISSING | RP_HAL_CAM_DROPPED;
             c->dropped = 0;
             continue;

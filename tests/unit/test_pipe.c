@@ -399,6 +399,87 @@ static void test_bad_calls(void **state)
     assert_status(rp_pipe_info(NULL, NULL), RP_E_ARG);
 }
 
+/* The phased step (rp_pipe_begin, rp_pipe_track per tracker in any order, rp_pipe_match,
+ * rp_pipe_estimate) is rp_pipe_step: stereo4 and gc on 6 frames with the trackers run last to
+ * first give the same estimates, bit for bit, as rp_pipe_step; calls out of order are refused
+ * and a step left unfinished is dropped by the next begin. */
+static rp_pipe_t pipe2;
+
+static void phased_step(rp_pipe_t *p, const rp_image_t *const ptr[], int64_t utime,
+                        rp_estimate_t *est)
+{
+    assert_ok(rp_pipe_begin(p, utime, NULL)); /* est optional: a front end has none */
+    for (int t = rp_pipe_n_trackers(p) - 1; t >= 0; --t) {
+        assert_ok(rp_pipe_track(p, (uint8_t)t, ptr, NCAM));
+    }
+    assert_ok(rp_pipe_match(p));
+    const rp_frameset_t *fs;
+    assert_ok(rp_pipe_frameset(p, &fs));
+    assert_int_equal(fs->utime, utime);
+    const rp_status_t st = rp_pipe_estimate(p, est);
+    assert_true(st == RP_OK || st == RP_E_TOO_FEW);
+}
+
+static void test_phased_step_is_the_step(void **state)
+{
+    (void)state;
+    static const rp_pipe_layout_t layouts[2] = {RP_PIPE_STEREO4, RP_PIPE_GC};
+    for (int li = 0; li < 2; ++li) {
+        rp_pipe_cfg_t cfg;
+        assert_ok(rp_pipe_default_cfg(layouts[li], &cfg));
+        cfg.gc.init_depth_m = RP_C(1.2);
+        cfg.gc.init_depth_sigma_m = RP_C(0.3);
+        cfg.gc.init_on_sphere = 1;
+        assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+        assert_ok(rp_pipe_init(&pipe2, &rig, &cfg));
+        assert_int_equal(rp_pipe_n_trackers(&pipe), 4);
+        uint8_t cam = 99;
+        assert_ok(rp_pipe_tracker_cam(&pipe, 1, &cam));
+        assert_int_equal(cam, layouts[li] == RP_PIPE_GC ? 1 : 4); /* gc: cam2; stereo4: cam1b */
+        for (int j = 0; j < 6; ++j) {
+            rp_image_t im[NCAM];
+            const rp_image_t *ptr[NCAM];
+            for (int k = 0; k < NCAM; ++k) {
+                im[k] = fx_image(frames[j][k], W, H);
+                ptr[k] = &im[k];
+            }
+            rp_estimate_t a, b;
+            const rp_status_t st = rp_pipe_step(&pipe, ptr, NCAM, (int64_t)j * DT_US, &a);
+            assert_true(st == RP_OK || st == RP_E_TOO_FEW);
+            phased_step(&pipe2, ptr, (int64_t)j * DT_US, &b);
+            assert_memory_equal(a.p, b.p, sizeof a.p);
+            assert_memory_equal(a.cov, b.cov, sizeof a.cov);
+            assert_int_equal(a.flags, b.flags);
+            assert_memory_equal(a.n_used, b.n_used, sizeof a.n_used);
+        }
+    }
+    /* out of order */
+    rp_image_t im0 = fx_image(frames[0][0], W, H);
+    const rp_image_t *ptr[NCAM] = {&im0, NULL, NULL, NULL, NULL, NULL};
+    rp_estimate_t est;
+    uint8_t cam;
+    assert_status(rp_pipe_track(&pipe2, 0, ptr, NCAM), RP_E_ARG);   /* no step begun */
+    assert_status(rp_pipe_match(&pipe2), RP_E_ARG);
+    assert_status(rp_pipe_estimate(&pipe2, &est), RP_E_ARG);
+    assert_true(est.flags & RP_EST_LOST);
+    assert_status(rp_pipe_begin(&pipe2, 5 * DT_US, &est), RP_E_RANGE); /* not after the last */
+    assert_true(est.flags & RP_EST_LOST);
+    assert_ok(rp_pipe_begin(&pipe2, 7 * DT_US, NULL));
+    assert_status(rp_pipe_estimate(&pipe2, &est), RP_E_ARG);          /* not matched */
+    assert_ok(rp_pipe_begin(&pipe2, 8 * DT_US, NULL));                /* dropped, started over */
+    assert_status(rp_pipe_track(&pipe2, 4, ptr, NCAM), RP_E_ARG);     /* tracker out of range */
+    assert_status(rp_pipe_track(&pipe2, 0, NULL, NCAM), RP_E_ARG);
+    assert_status(rp_pipe_track(&pipe2, 0, ptr, RP_MAX_CAMS + 1), RP_E_ARG);
+    assert_ok(rp_pipe_track(&pipe2, 0, ptr, NCAM));
+    assert_ok(rp_pipe_match(&pipe2));
+    assert_status(rp_pipe_track(&pipe2, 1, ptr, NCAM), RP_E_ARG);     /* matched already */
+    assert_status(rp_pipe_estimate(&pipe2, NULL), RP_E_ARG);
+    assert_status(rp_pipe_begin(NULL, 0, NULL), RP_E_ARG);
+    assert_int_equal(rp_pipe_n_trackers(NULL), 0);
+    assert_status(rp_pipe_tracker_cam(&pipe2, 4, &cam), RP_E_ARG);
+    assert_status(rp_pipe_tracker_cam(&pipe2, 0, NULL), RP_E_ARG);
+}
+
 /* Feature-level input: rp_pipe_step_feats gives exactly what the layout's estimator gives on
  * the same frame sets (stereo4 against rp_vo_stereo, gc against rp_vo_gc, 12 frame sets of
  * run 0 of the simulation seeded 3), keeps the frame set and reports the cameras; a repeated
@@ -474,6 +555,7 @@ int main(void)
         cmocka_unit_test(test_single_camera_and_rc_run),
         cmocka_unit_test(test_bad_images_give_states),
         cmocka_unit_test(test_bad_calls),
+        cmocka_unit_test(test_phased_step_is_the_step),
         cmocka_unit_test(test_step_feats_is_the_layouts_estimator),
     };
     return cmocka_run_group_tests(tests, setup_frames, NULL);

@@ -145,6 +145,8 @@ typedef struct {
                                                * holds (rp_pipe.c, finish) */
     uint8_t was_held;                         /* the last held estimate is not yet followed by
                                                * an update */
+    uint8_t in_step;                          /* phased step: 0 none, 1 begun (tracking),
+                                               * 2 matched (rp_pipe_begin .. rp_pipe_estimate) */
     rp_pipe_info_t info;
     int64_t last_utime;
     rp_feat_t scratch_a[RP_MAX_FEATS_PER_CAM]; /* new left features to match */
@@ -197,6 +199,40 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
  *   otherwise       an estimator's error (rp_vo_*_step), est as it filled it. */
 rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
                          int64_t utime, rp_estimate_t *est);
+
+/* The same step in phases, for a caller that runs the cameras' trackers in parallel (one
+ * thread per camera; core/ itself starts no thread). rp_pipe_step is exactly
+ *   rp_pipe_begin; rp_pipe_track for t = 0 .. rp_pipe_n_trackers - 1; rp_pipe_match;
+ *   rp_pipe_estimate
+ * and the result does not depend on the order or the threads the rp_pipe_track calls run on:
+ * tracker t reads and writes only its own tracker and its camera's entries of the frame set
+ * and of the report, so the calls for distinct t may run concurrently (each t once per step,
+ * all of them returned before rp_pipe_match). Every other call, and every accessor, must not
+ * overlap any other call on the same pipe.
+ *
+ * rp_pipe_begin: checks and starts a step at utime. est may be NULL (a front end that does not
+ *   estimate); if given it is filled on failure as rp_pipe_step says. Returns RP_OK, RP_E_RANGE
+ *   (utime not after the previous step's: nothing started) or RP_E_ARG (NULL or not
+ *   initialised). A step begun and never estimated is dropped by the next rp_pipe_begin (or
+ *   rp_pipe_step, rp_pipe_step_feats); its trackers have moved on.
+ * rp_pipe_track: tracker t (0 .. rp_pipe_n_trackers - 1) on its camera's image in images (as
+ *   rp_pipe_step takes them). The outcome is in the camera's report (rp_pipe_info); the status
+ *   is RP_OK, or RP_E_ARG (no step begun, t out of range, images NULL, n > RP_MAX_CAMS).
+ * rp_pipe_match: stereo matching of the pairs' new features (stereo layouts; nothing for the
+ *   others). After it rp_pipe_frameset holds the frame set the estimator will see. RP_E_ARG if
+ *   no step is begun.
+ * rp_pipe_estimate: the layout's estimator on the frame set; returns as rp_pipe_step does, or
+ *   RP_E_ARG (est NULL, or not matched) with est, if given, zeroed and LOST. */
+rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est);
+rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const images[],
+                          uint8_t n);
+rp_status_t rp_pipe_match(rp_pipe_t *pipe);
+rp_status_t rp_pipe_estimate(rp_pipe_t *pipe, rp_estimate_t *est);
+
+/* Trackers of the layout (0 for NULL or not initialised) and the rig camera of tracker t
+ * (RP_E_ARG: NULL, not initialised, t out of range). */
+uint8_t rp_pipe_n_trackers(const rp_pipe_t *pipe);
+rp_status_t rp_pipe_tracker_cam(const rp_pipe_t *pipe, uint8_t t, uint8_t *cam);
 
 /* Feature-level input: run the layout's estimator on fs, a frame set of features built
  * elsewhere (rp_frame.h; ids shared between the cameras of a stereo pair), skipping the

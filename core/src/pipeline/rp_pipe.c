@@ -203,6 +203,7 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
     memset(pipe->held_cov, 0, sizeof(pipe->held_cov));
     memset(pipe->anchor_cov, 0, sizeof(pipe->anchor_cov));
     pipe->was_held = 0;
+    pipe->in_step = 0;
     memset(&pipe->info, 0, sizeof(pipe->info));
     pipe->last_utime = 0;
     pipe->magic = RP_PIPE_MAGIC;
@@ -393,19 +394,23 @@ static void finish(rp_pipe_t *pipe, rp_estimate_t *est)
 }
 
 /* The checks every step starts with (arguments, time order); on success a fresh report for
- * this step. RP_OK or the status to return (est then filled as rp_pipe.h says). */
+ * this step. RP_OK or the status to return (est, if given, then filled as rp_pipe.h says). A
+ * phased step left unfinished (rp_pipe_begin without rp_pipe_estimate) is dropped. */
 static rp_status_t step_begin(rp_pipe_t *pipe, int args_ok, int64_t utime, rp_estimate_t *est)
 {
-    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || !args_ok || est == NULL) {
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || !args_ok) {
         if (est != NULL) {
             memset(est, 0, sizeof(*est));
             est->flags = RP_EST_LOST;
         }
         return RP_E_ARG;
     }
+    pipe->in_step = 0;
     if (pipe->info.frame > 0 && utime <= pipe->last_utime) {
-        *est = pipe->last;
-        est->flags |= RP_EST_LOST;
+        if (est != NULL) {
+            *est = pipe->last;
+            est->flags |= RP_EST_LOST;
+        }
         return RP_E_RANGE;
     }
     rp_pipe_info_t *info = &pipe->info;
@@ -416,22 +421,36 @@ static rp_status_t step_begin(rp_pipe_t *pipe, int args_ok, int64_t utime, rp_es
     return RP_OK;
 }
 
-rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
-                         int64_t utime, rp_estimate_t *est)
+rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est)
 {
-    const rp_status_t st0 = step_begin(pipe, images != NULL && n <= RP_MAX_CAMS, utime, est);
+    const rp_status_t st0 = step_begin(pipe, 1, utime, est);
     if (st0 != RP_OK) {
         return st0;
     }
-    rp_pipe_info_t *info = &pipe->info;
     memset(pipe->fs.n, 0, sizeof(pipe->fs.n));
     pipe->fs.utime = utime;
+    pipe->in_step = 1;
+    return RP_OK;
+}
 
-    uint8_t taken = 0, lacking = 0;
-    for (uint8_t t = 0; t < pipe->n_trk; ++t) {
-        const uint8_t cam = pipe->trk_cam[t];
-        track_one(pipe, t, cam < n ? images[cam] : NULL, utime);
+rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const images[],
+                          uint8_t n)
+{
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || pipe->in_step != 1 || t >= pipe->n_trk ||
+        images == NULL || n > RP_MAX_CAMS) {
+        return RP_E_ARG;
     }
+    const uint8_t cam = pipe->trk_cam[t];
+    track_one(pipe, t, cam < n ? images[cam] : NULL, pipe->fs.utime);
+    return RP_OK;
+}
+
+rp_status_t rp_pipe_match(rp_pipe_t *pipe)
+{
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || pipe->in_step != 1) {
+        return RP_E_ARG;
+    }
+    rp_pipe_info_t *info = &pipe->info;
     if (is_stereo(pipe->cfg.layout)) {
         for (uint8_t k = 0; k < pipe->cfg.stereo.n_pairs; ++k) {
             match_new(pipe, k);
@@ -441,6 +460,22 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
             }
         }
     }
+    pipe->in_step = 2;
+    return RP_OK;
+}
+
+rp_status_t rp_pipe_estimate(rp_pipe_t *pipe, rp_estimate_t *est)
+{
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || pipe->in_step != 2 || est == NULL) {
+        if (est != NULL) {
+            memset(est, 0, sizeof(*est));
+            est->flags = RP_EST_LOST;
+        }
+        return RP_E_ARG;
+    }
+    pipe->in_step = 0;
+    rp_pipe_info_t *info = &pipe->info;
+    uint8_t taken = 0, lacking = 0;
     for (uint8_t t = 0; t < pipe->n_trk; ++t) {
         const uint8_t s = info->cam_state[pipe->trk_cam[t]];
         taken = (uint8_t)(taken + image_taken(s));
@@ -461,9 +496,28 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
     return taken == 0 ? RP_E_DEGENERATE : st;
 }
 
+rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
+                         int64_t utime, rp_estimate_t *est)
+{
+    if (images == NULL || n > RP_MAX_CAMS || est == NULL) {
+        /* ignored: RP_E_ARG whatever the pipe; it fills est, if given, as rp_pipe.h says */
+        (void)step_begin(pipe, 0, utime, est);
+        return RP_E_ARG;
+    }
+    rp_status_t st = rp_pipe_begin(pipe, utime, est);
+    for (uint8_t t = 0; st == RP_OK && t < pipe->n_trk; ++t) {
+        st = rp_pipe_track(pipe, t, images, n);
+    }
+    if (st == RP_OK) {
+        st = rp_pipe_match(pipe);
+    }
+    return st == RP_OK ? rp_pipe_estimate(pipe, est) : st;
+}
+
 rp_status_t rp_pipe_step_feats(rp_pipe_t *pipe, const rp_frameset_t *fs, rp_estimate_t *est)
 {
-    const rp_status_t st0 = step_begin(pipe, fs != NULL, fs != NULL ? fs->utime : 0, est);
+    const rp_status_t st0 =
+        step_begin(pipe, fs != NULL && est != NULL, fs != NULL ? fs->utime : 0, est);
     if (st0 != RP_OK) {
         return st0;
     }
@@ -476,6 +530,20 @@ rp_status_t rp_pipe_step_feats(rp_pipe_t *pipe, const rp_frameset_t *fs, rp_esti
     pipe->info.est_status = st;
     finish(pipe, est);
     return st;
+}
+
+uint8_t rp_pipe_n_trackers(const rp_pipe_t *pipe)
+{
+    return (pipe != NULL && pipe->magic == RP_PIPE_MAGIC) ? pipe->n_trk : 0;
+}
+
+rp_status_t rp_pipe_tracker_cam(const rp_pipe_t *pipe, uint8_t t, uint8_t *cam)
+{
+    if (pipe == NULL || cam == NULL || pipe->magic != RP_PIPE_MAGIC || t >= pipe->n_trk) {
+        return RP_E_ARG;
+    }
+    *cam = pipe->trk_cam[t];
+    return RP_OK;
 }
 
 rp_status_t rp_pipe_frameset(const rp_pipe_t *pipe, const rp_frameset_t **fs)

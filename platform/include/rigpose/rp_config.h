@@ -32,6 +32,7 @@
 
 #include "rigpose/rp_hal.h"
 #include "rigpose/rp_pipe.h"
+#include "rigpose/rp_pool.h"
 #include "rigpose/rp_rig.h"
 
 #ifdef __cplusplus
@@ -85,6 +86,10 @@ typedef struct {
     uint32_t status_every;                  /* frame sets between status messages, >= 1 */
     char instance[32];                      /* lcm.instance: who publishes (pose_t.instance);
                                              * "" = the daemon's default, HOST:PID */
+    uint8_t threads;                        /* threads of the image front end in all, the
+                                             * daemon's included (1..RP_POOL_MAX_THREADS);
+                                             * 0 = the daemon's default: the online cores, at
+                                             * most one per camera (rp_pool.h) */
 } rp_config_t;
 
 /* Read and check the file at path. On failure cfg is unspecified and err (err_len bytes, may be

@@ -72,6 +72,16 @@ typedef struct {
     uint16_t fps;                 /* wanted rate (v4l2) */
 } rp_hal_cam_cfg_t;
 
+/* A way to run jobs in parallel, given by the caller (the daemon's rp_pool_run): runs
+ * fn(arg, j) for j = 0 .. n_jobs - 1, possibly on several threads at once, and returns once
+ * all have returned (0), or fails having run none (non-zero). Sources that decode or convert
+ * images (replay: PNG / PGM files; v4l2: MJPEG / YUYV / UYVY) then decode each camera's image
+ * in a job of its own, the cameras' jobs touching only their camera's buffers; the set
+ * delivered is the same as without it (NULL: one camera after the other, on the grabbing
+ * thread). */
+typedef int (*rp_hal_jobs_fn_t)(void *ctx, unsigned n_jobs, void (*fn)(void *arg, unsigned job),
+                                void *arg);
+
 typedef struct {
     rp_hal_kind_t kind;
     uint8_t n_cams;                      /* 1..RP_MAX_CAMS */
@@ -92,6 +102,8 @@ typedef struct {
     const struct rp_hal_sim_opts *sim_opts; /* sim: pixel noise, a vanishing camera
                                              * (rp_hal_sim.h); NULL: the protocol's defaults.
                                              * Read by rp_hal_open only */
+    rp_hal_jobs_fn_t run_jobs;           /* optional: how to run one job per camera (below) */
+    void *run_jobs_ctx;
 } rp_hal_cfg_t;
 
 /* Per-camera state in one set. */
