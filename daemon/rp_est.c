@@ -83,6 +83,15 @@ static void track_job(void *arg, unsigned t)
     (void)rp_pipe_track(&est->pipe, (uint8_t)t, est->images, est->n_images);
 }
 
+/* Job k of a set: stereo pair k's matching of its new features. */
+static void match_job(void *arg, unsigned k)
+{
+    rp_est_t *est = (rp_est_t *)arg;
+    /* ignored: RP_E_ARG only for a step not begun or k out of range, which the caller rules
+     * out; the matcher's counts are in the pipeline's report */
+    (void)rp_pipe_match_pair(&est->pipe, (uint8_t)k);
+}
+
 rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], uint8_t n,
                                int64_t utime, rp_estimate_t *out, const rp_frameset_t **fs_out)
 {
@@ -105,9 +114,10 @@ rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], 
             est->images = images;
             est->n_images = n;
             if (rp_pool_run(&est->pool, rp_pipe_n_trackers(&est->pipe), track_job, est) ==
-                RP_OK) {
+                    RP_OK &&
+                rp_pool_run(&est->pool, rp_pipe_n_pairs(&est->pipe), match_job, est) == RP_OK) {
                 /* ignored: RP_E_ARG only for a step not begun; rp_pipe_estimate then says so */
-                (void)rp_pipe_match(&est->pipe);
+                (void)rp_pipe_match(&est->pipe); /* every pair matched: the step moves on */
             }
             est->images = NULL;
             st = rp_pipe_estimate(&est->pipe, out); /* RP_E_ARG, out LOST, if not matched */

@@ -5,8 +5,9 @@
  * the same layout's estimator (rp_est_step). One estimator dispatch for both: rp_pipe's.
  *
  * Threads (issue 17): a fixed pool (rp_pool.h) of cfg->threads threads, the caller's included,
- * started by rp_est_init. Each camera's tracker of a set is one job of the pool (rp_pipe_track);
- * stereo matching and the estimator then run on the caller's thread. rp_est_hal_jobs lends the
+ * started by rp_est_init. Each camera's tracker of a set is one job of the pool (rp_pipe_track),
+ * then each stereo pair's matching (rp_pipe_match_pair); the estimator then runs on the
+ * caller's thread. rp_est_hal_jobs lends the
  * same pool to the HAL (rp_hal_cfg_t.run_jobs), so each camera's image is decoded in a job too.
  * The poses do not depend on the number of threads (rp_pipe.h: a tracker touches only its own
  * camera's state; the estimator's input is the same frame set in the same order).
@@ -20,7 +21,7 @@
 #include "rigpose/rp_pool.h"
 
 typedef struct {
-    rp_pipe_t pipe; /* 4.1-4.4 MB at the default limits: keep an rp_est_t static */
+    rp_pipe_t pipe; /* 5.1-6.3 MB at the default limits: keep an rp_est_t static */
     rp_pool_t pool;
     const rp_image_t *const *images; /* the set being tracked (read by the jobs) */
     uint8_t n_images;

@@ -412,6 +412,10 @@ static void phased_step(rp_pipe_t *p, const rp_image_t *const ptr[], int64_t uti
     for (int t = rp_pipe_n_trackers(p) - 1; t >= 0; --t) {
         assert_ok(rp_pipe_track(p, (uint8_t)t, ptr, NCAM));
     }
+    for (int k = rp_pipe_n_pairs(p) - 1; k >= 0; --k) { /* pairs last to first, one twice */
+        assert_ok(rp_pipe_match_pair(p, (uint8_t)k));
+        assert_ok(rp_pipe_match_pair(p, (uint8_t)k));
+    }
     assert_ok(rp_pipe_match(p));
     const rp_frameset_t *fs;
     assert_ok(rp_pipe_frameset(p, &fs));
@@ -433,6 +437,7 @@ static void test_phased_step_is_the_step(void **state)
         assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
         assert_ok(rp_pipe_init(&pipe2, &rig, &cfg));
         assert_int_equal(rp_pipe_n_trackers(&pipe), 4);
+        assert_int_equal(rp_pipe_n_pairs(&pipe), layouts[li] == RP_PIPE_GC ? 0 : 2);
         uint8_t cam = 99;
         assert_ok(rp_pipe_tracker_cam(&pipe, 1, &cam));
         assert_int_equal(cam, layouts[li] == RP_PIPE_GC ? 1 : 4); /* gc: cam2; stereo4: cam1b */
@@ -473,6 +478,7 @@ static void test_phased_step_is_the_step(void **state)
     assert_ok(rp_pipe_track(&pipe2, 0, ptr, NCAM));
     assert_ok(rp_pipe_match(&pipe2));
     assert_status(rp_pipe_track(&pipe2, 1, ptr, NCAM), RP_E_ARG);     /* matched already */
+    assert_status(rp_pipe_match_pair(&pipe2, 0), RP_E_ARG);           /* gc: no pairs */
     assert_status(rp_pipe_estimate(&pipe2, NULL), RP_E_ARG);
     assert_status(rp_pipe_begin(NULL, 0, NULL), RP_E_ARG);
     assert_int_equal(rp_pipe_n_trackers(NULL), 0);

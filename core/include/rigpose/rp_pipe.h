@@ -27,8 +27,9 @@
  * carries them too). Matching costs only at births, not every frame.
  *
  * Memory: rp_pipe_t holds RP_PIPE_MAX_TRACKERS trackers (each two pyramids and a response map
- * at the tracker's size limits: sizeof(rp_tracker_t) is 0.90 MB at the default 640x480) and
- * the estimator: 4.4 MB in all with double rp_real, 4.1 MB with float. Allocate it statically
+ * at the tracker's size limits: sizeof(rp_tracker_t) is 0.90 MB at the default 640x480), each
+ * stereo pair's matcher and scratch, and the estimator: 6.3 MB in all with double rp_real,
+ * 5.1 MB with float (sizeof at the default limits). Allocate it statically
  * (`static rp_pipe_t pipe;`).
  *
  * Feature-level input: rp_pipe_step_feats runs the layout's estimator on a frame set built
@@ -114,6 +115,15 @@ typedef struct {
     rp_status_t est_status;                   /* the estimator's status (RP_OK if not run) */
 } rp_pipe_info_t;
 
+/* One stereo pair's matching state (its own, so that pairs may be matched concurrently). */
+typedef struct {
+    rp_smatch_t sm;
+    rp_feat_t scratch_a[RP_MAX_FEATS_PER_CAM]; /* new left features to match */
+    rp_feat_t scratch_b[RP_MAX_FEATS_PER_CAM]; /* their matches */
+    uint32_t drop_ids[RP_MAX_FEATS_PER_CAM];  /* new left features left unmatched */
+    uint8_t done;                             /* matched in this step */
+} rp_pipe_pairmatch_t;
+
 /* Caller-owned pipeline state. Large: allocate it statically. Fields are read-only for callers
  * (use the accessors below). */
 typedef struct {
@@ -128,7 +138,7 @@ typedef struct {
     uint32_t born_k[RP_PIPE_MAX_TRACKERS];    /* left trackers: next_k before this step (ids at
                                                * or past it are new) */
     rp_stereo_pair_t pair[RP_MAX_PAIRS];
-    rp_smatch_t sm;
+    rp_pipe_pairmatch_t pm[RP_MAX_PAIRS];     /* each pair's matcher and scratch */
     union {
         rp_vo_stereo_t stereo;
         rp_vo_gc_t gc;
@@ -149,9 +159,6 @@ typedef struct {
                                                * 2 matched (rp_pipe_begin .. rp_pipe_estimate) */
     rp_pipe_info_t info;
     int64_t last_utime;
-    rp_feat_t scratch_a[RP_MAX_FEATS_PER_CAM]; /* new left features to match */
-    rp_feat_t scratch_b[RP_MAX_FEATS_PER_CAM]; /* their matches */
-    uint32_t drop_ids[RP_MAX_FEATS_PER_CAM];  /* scratch: new left features left unmatched */
 } rp_pipe_t;
 
 /* Name of a layout ("stereo4", "stereo2", "gc", "cam1".."cam4", "rc"); "?" if out of range. */
@@ -202,13 +209,13 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
 
 /* The same step in phases, for a caller that runs the cameras' trackers in parallel (one
  * thread per camera; core/ itself starts no thread). rp_pipe_step is exactly
- *   rp_pipe_begin; rp_pipe_track for t = 0 .. rp_pipe_n_trackers - 1; rp_pipe_match;
- *   rp_pipe_estimate
+ *   rp_pipe_begin; rp_pipe_track for t = 0 .. rp_pipe_n_trackers - 1; rp_pipe_match (which
+ *   is rp_pipe_match_pair for k = 0 .. rp_pipe_n_pairs - 1); rp_pipe_estimate
  * and the result does not depend on the order or the threads the rp_pipe_track calls run on:
  * tracker t reads and writes only its own tracker and its camera's entries of the frame set
  * and of the report, so the calls for distinct t may run concurrently (each t once per step,
- * all of them returned before rp_pipe_match). Every other call, and every accessor, must not
- * overlap any other call on the same pipe.
+ * all of them returned before any matching); so may rp_pipe_match_pair for distinct pairs.
+ * Every other call, and every accessor, must not overlap any other call on the same pipe.
  *
  * rp_pipe_begin: checks and starts a step at utime. est may be NULL (a front end that does not
  *   estimate); if given it is filled on failure as rp_pipe_step says. Returns RP_OK, RP_E_RANGE
@@ -219,19 +226,26 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
  *   rp_pipe_step takes them). The outcome is in the camera's report (rp_pipe_info); the status
  *   is RP_OK, or RP_E_ARG (no step begun, t out of range, images NULL, n > RP_MAX_CAMS).
  * rp_pipe_match: stereo matching of the pairs' new features (stereo layouts; nothing for the
- *   others). After it rp_pipe_frameset holds the frame set the estimator will see. RP_E_ARG if
- *   no step is begun.
+ *   others), of every pair not matched yet by rp_pipe_match_pair. After it rp_pipe_frameset
+ *   holds the frame set the estimator will see. RP_E_ARG if no step is begun.
+ * rp_pipe_match_pair: pair k's matching alone (k < rp_pipe_n_pairs), after every rp_pipe_track
+ *   of the step has returned; calls for distinct k may run concurrently (a pair touches only its
+ *   two cameras' trackers and entries, and its own matcher). RP_E_ARG: no step begun, not a
+ *   stereo layout, k out of range. A pair matched twice in a step is matched once.
  * rp_pipe_estimate: the layout's estimator on the frame set; returns as rp_pipe_step does, or
  *   RP_E_ARG (est NULL, or not matched) with est, if given, zeroed and LOST. */
 rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est);
 rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const images[],
                           uint8_t n);
+rp_status_t rp_pipe_match_pair(rp_pipe_t *pipe, uint8_t k);
 rp_status_t rp_pipe_match(rp_pipe_t *pipe);
 rp_status_t rp_pipe_estimate(rp_pipe_t *pipe, rp_estimate_t *est);
 
 /* Trackers of the layout (0 for NULL or not initialised) and the rig camera of tracker t
  * (RP_E_ARG: NULL, not initialised, t out of range). */
 uint8_t rp_pipe_n_trackers(const rp_pipe_t *pipe);
+/* Stereo pairs of the layout (0 for the other layouts, NULL or not initialised). */
+uint8_t rp_pipe_n_pairs(const rp_pipe_t *pipe);
 rp_status_t rp_pipe_tracker_cam(const rp_pipe_t *pipe, uint8_t t, uint8_t *cam);
 
 /* Feature-level input: run the layout's estimator on fs, a frame set of features built

@@ -190,7 +190,9 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
     }
     st = init_trackers(pipe);
     if (st == RP_OK) {
-        st = rp_smatch_init(&pipe->sm, &cfg->smatch);
+        for (uint8_t k = 0; k < RP_MAX_PAIRS && st == RP_OK; ++k) {
+            st = rp_smatch_init(&pipe->pm[k].sm, &cfg->smatch);
+        }
     }
     if (st == RP_OK) {
         st = init_estimator(pipe);
@@ -222,6 +224,7 @@ static int image_taken(uint8_t state)
 static void match_new(rp_pipe_t *pipe, uint8_t k)
 {
     const rp_stereo_pair_t *sp = &pipe->pair[k];
+    rp_pipe_pairmatch_t *pm = &pipe->pm[k];
     const int ta = pipe->cam_trk[sp->a], tb = pipe->cam_trk[sp->b];
     rp_pipe_info_t *info = &pipe->info;
     if (!image_taken(info->cam_state[sp->a]) || !image_taken(info->cam_state[sp->b])) {
@@ -237,7 +240,7 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     for (uint16_t i = 0; i < pipe->fs.n[sp->a]; ++i) {
         const rp_feat_t *f = &pipe->fs.f[sp->a][i];
         if (rp_track_serial_since(rp_track_id_serial(f->id), pipe->born_k[ta])) {
-            pipe->scratch_a[n_new++] = *f;
+            pm->scratch_a[n_new++] = *f;
         }
     }
     if (n_new == 0) {
@@ -245,10 +248,10 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     }
     uint16_t nb = 0;
     /* ignored: counted in pipe->info.match; no match adds nothing */
-    (void)rp_smatch_pair(&pipe->sm, pipe->rig, sp, pa, pb, pipe->scratch_a, n_new,
-                         pipe->scratch_b, RP_MAX_FEATS_PER_CAM, &nb, &info->match[k]);
+    (void)rp_smatch_pair(&pm->sm, pipe->rig, sp, pa, pb, pm->scratch_a, n_new, pm->scratch_b,
+                         RP_MAX_FEATS_PER_CAM, &nb, &info->match[k]);
     uint16_t n_adopted = 0;
-    while (n_adopted < nb && rp_track_adopt(B, &pipe->scratch_b[n_adopted]) == RP_OK) {
+    while (n_adopted < nb && rp_track_adopt(B, &pm->scratch_b[n_adopted]) == RP_OK) {
         ++n_adopted;
     }
     /* A new left feature without a match gives the stereo estimator nothing (it triangulates
@@ -257,16 +260,16 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
      * for a feature there again (the matcher walks both lists in input order). */
     uint16_t n_lost = 0;
     for (uint16_t i = 0, j = 0; i < n_new; ++i) {
-        if (j < n_adopted && pipe->scratch_b[j].id == pipe->scratch_a[i].id) {
+        if (j < n_adopted && pm->scratch_b[j].id == pm->scratch_a[i].id) {
             ++j;
         } else {
-            pipe->drop_ids[n_lost++] = pipe->scratch_a[i].id;
+            pm->drop_ids[n_lost++] = pm->scratch_a[i].id;
         }
     }
     if (n_lost > 0) {
         rp_tracker_t *A = &pipe->trk[ta];
         /* ignored: cannot fail: the pipeline's own tracker, checked at init */
-        (void)rp_track_drop_ids(A, pipe->drop_ids, n_lost, NULL);
+        (void)rp_track_drop_ids(A, pm->drop_ids, n_lost, NULL);
         /* ignored: RP_E_FULL keeps the frame set's own limit */
         (void)rp_track_features(A, pipe->fs.f[sp->a], RP_MAX_FEATS_PER_CAM, &pipe->fs.n[sp->a]);
     }
@@ -429,6 +432,9 @@ rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est)
     }
     memset(pipe->fs.n, 0, sizeof(pipe->fs.n));
     pipe->fs.utime = utime;
+    for (uint8_t k = 0; k < RP_MAX_PAIRS; ++k) {
+        pipe->pm[k].done = 0;
+    }
     pipe->in_step = 1;
     return RP_OK;
 }
@@ -445,20 +451,40 @@ rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const im
     return RP_OK;
 }
 
+rp_status_t rp_pipe_match_pair(rp_pipe_t *pipe, uint8_t k)
+{
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || pipe->in_step != 1 ||
+        !is_stereo(pipe->cfg.layout) || k >= pipe->cfg.stereo.n_pairs) {
+        return RP_E_ARG;
+    }
+    if (pipe->pm[k].done) {
+        return RP_OK;
+    }
+    match_new(pipe, k);
+    rp_pipe_info_t *info = &pipe->info;
+    const uint8_t b = pipe->pair[k].b;
+    if (info->cam_state[b] == RP_PIPE_CAM_NO_FEATURES && pipe->fs.n[b] > 0) {
+        info->cam_state[b] = RP_PIPE_CAM_OK;
+    }
+    pipe->pm[k].done = 1;
+    return RP_OK;
+}
+
+uint8_t rp_pipe_n_pairs(const rp_pipe_t *pipe)
+{
+    return (pipe != NULL && pipe->magic == RP_PIPE_MAGIC && is_stereo(pipe->cfg.layout))
+               ? pipe->cfg.stereo.n_pairs
+               : 0;
+}
+
 rp_status_t rp_pipe_match(rp_pipe_t *pipe)
 {
     if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || pipe->in_step != 1) {
         return RP_E_ARG;
     }
-    rp_pipe_info_t *info = &pipe->info;
-    if (is_stereo(pipe->cfg.layout)) {
-        for (uint8_t k = 0; k < pipe->cfg.stereo.n_pairs; ++k) {
-            match_new(pipe, k);
-            const uint8_t b = pipe->pair[k].b;
-            if (info->cam_state[b] == RP_PIPE_CAM_NO_FEATURES && pipe->fs.n[b] > 0) {
-                info->cam_state[b] = RP_PIPE_CAM_OK;
-            }
-        }
+    for (uint8_t k = 0; k < rp_pipe_n_pairs(pipe); ++k) {
+        /* ignored: k is a pair of the layout and the step is begun: RP_OK */
+        (void)rp_pipe_match_pair(pipe, k);
     }
     pipe->in_step = 2;
     return RP_OK;
