@@ -31,8 +31,8 @@
  *
  * Every failure is said once, on stderr, in the HAL's words (rp_hal_errmsg: file and line,
  * camera, device, errno): a failed open or start; each failed grab and each set delivered
- * with cameras missing for a reason (a replay image that could not be read, a v4l2 camera
- * lost), rate-limited (SAY_BURST lines, then one per SAY_EVERY_US, with the count of lines
+ * degraded for a reason (cameras missing: a replay image that could not be read, a v4l2 camera
+ * lost; a malformed truth.csv row skipped), rate-limited (SAY_BURST lines, then one per SAY_EVERY_US, with the count of lines
  * not shown); and on stdout one line per change of a camera's state and of the estimator's
  * step status or LOST flag (rate-limited alike).
  *
@@ -195,7 +195,7 @@ static void say_source(int32_t seq, rp_hal_status_t hst, const char *msg)
         return;
     }
     if (hst == RP_HAL_OK) {
-        fprintf(stderr, "rigpose: set %d: camera source: cameras missing: %s", seq, msg);
+        fprintf(stderr, "rigpose: set %d: camera source: degraded set: %s", seq, msg);
     } else {
         fprintf(stderr, "rigpose: set %d: camera source: %s: %s", seq, rp_hal_status_str(hst),
                 msg[0] != '\0' ? msg : "(no message)");
@@ -456,7 +456,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
             continue;
         }
         grab_errors = 0;
-        if (rp_hal_errmsg(src)[0] != '\0') { /* a set with cameras missing, and why */
+        if (rp_hal_errmsg(src)[0] != '\0') { /* a degraded set (cameras missing...), and why */
             g_n_degraded++;
             say_source(seq, hst, rp_hal_errmsg(src));
         }
@@ -617,7 +617,7 @@ int main(int argc, char **argv)
     lcm_destroy(lcm);
     if (g_n_grab_failed > 0 || g_n_degraded > 0) {
         fprintf(stderr, "rigpose: camera source: %u failed grabs (%u of them timeouts), %u sets "
-                "with cameras missing for a reason", g_n_grab_failed, g_n_timeouts, g_n_degraded);
+                "delivered degraded for a reason", g_n_grab_failed, g_n_timeouts, g_n_degraded);
         if (g_say_src.not_shown > 0) {
             fprintf(stderr, "; the last %u of these messages not shown (rate limit)",
                     g_say_src.not_shown);

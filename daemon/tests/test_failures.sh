@@ -143,8 +143,13 @@ check vnull "$(t '[ $rc -eq 4 ] && has vnull "/dev/null: not a V4L2 device"')" \
 # ---- while running: said, the run goes on (exit 0) --------------------------------------------
 M=$TMP/miss; make_replay "$M" 6; rm "$M/c1_3.pgm"
 run miss "$M/rig.yaml"
-check miss "$(t '[ $rc -eq 0 ] && [ "$(poses miss)" = 6 ] && has miss "set 3: camera source: cameras missing: $M/frames.csv:5: camera 1: $M/c1_3.pgm: No such file or directory" && has_out miss "set 3: camera 1 (right): missing" && has_out miss "set 4: camera 1 (right): ok again" && ! has_out miss "camera 0 (left)"')" \
+check miss "$(t '[ $rc -eq 0 ] && [ "$(poses miss)" = 6 ] && has miss "set 3: camera source: degraded set: $M/frames.csv:5: camera 1: $M/c1_3.pgm: No such file or directory" && has_out miss "set 3: camera 1 (right): missing" && has_out miss "set 4: camera 1 (right): ok again" && ! has_out miss "camera 0 (left)"')" \
   "one missing image: exit 0, 6 of 6 sets published, only camera 1 missing, file:line named"
+TR=$TMP/truth; make_replay "$TR" 4
+printf 'utime_us,tx,ty,tz,alpha,beta,gamma\n1000,0,0,0,0,0,0\n34333,0,0,x,0,0,0\n66666,0,0,0,0,0,0\n99999,0,0,0,0,0,0\n' >"$TR/truth.csv"
+run truth "$TR/rig.yaml"
+check truth "$(t '[ $rc -eq 0 ] && [ "$(poses truth)" = 4 ] && has truth "set 1: camera source: degraded set: $TR/truth.csv:3: want utime_us and 6 numbers: row skipped, set 1 has no truth" && has truth "1 sets delivered degraded for a reason"')" \
+  "a malformed truth.csv row: exit 0, 4 of 4 sets published, the row named, only its truth skipped"
 F=$TMP/fifo; make_replay "$F" 4; rm "$F/c0_1.pgm" "$F/c1_2.pgm"; mkfifo "$F/c0_1.pgm"; mkdir "$F/c1_2.pgm"
 run fifo "$F/rig.yaml"
 check fifo "$(t '[ $rc -eq 0 ] && [ "$(poses fifo)" = 4 ] && has fifo "$F/frames.csv:3: camera 0: $F/c0_1.pgm: is a FIFO, not a regular file" && has fifo "$F/frames.csv:4: camera 1: $F/c1_2.pgm: is a directory"')" \

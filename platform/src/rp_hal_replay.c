@@ -13,6 +13,8 @@
  *               after it.
  *   truth.csv   optional, header `utime_us,tx,ty,tz,alpha,beta,gamma`: the pose of cam1 in the
  *               world (as rp_estimate_t.p); a set gets the row with its exact utime, if any.
+ *               A malformed row is skipped: the set it belongs to comes without truth, with
+ *               RP_HAL_OK and the row (file:line) named in the source's message.
  *   images      8-bit grey PNG (libpng; colour or 16-bit PNGs are converted to 8-bit grey) or
  *               binary PGM (P5, maxval <= 255), at most RP_HAL_MAX_W x RP_HAL_MAX_H, and of the
  *               configured size if one is given.
@@ -546,10 +548,12 @@ static int truth_at(replay_src_t *s, int64_t u)
             return 0;
         }
         if (r < 0 || split(s->buf, f, 7) != 7 || !parse_i64(f[0], &s->truth_u)) {
+            s->truth_have = 0; /* the row is skipped: no half-read truth is used */
             return -1;
         }
         for (unsigned i = 0; i < 6; i++) {
             if (!parse_real(f[i + 1], &s->truth_p[i])) {
+                s->truth_have = 0;
                 return -1;
             }
         }
@@ -625,10 +629,14 @@ static rp_hal_status_t read_row(replay_src_t *s)
         (void)snprintf(s->ready_msg + len, RP_HAL_ERR_MAX - len, " (and %u more cameras)",
                        n_bad - 1);
     }
+    /* A malformed truth.csv row costs only the truth: the set comes without it, the message
+     * says which row was skipped (the images are good). */
     const int tr = truth_at(s, u);
-    if (tr < 0) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s/truth.csv:%u: want utime_us and 6 numbers",
-                           s->dir, (unsigned)s->tline);
+    if (tr < 0 && s->ready_msg[0] == '\0') {
+        /* ignored: it returns the status it was given: here only the message is wanted */
+        (void)rp_hal_fail(s->ready_msg, RP_HAL_E_FORMAT,
+                          "%s/truth.csv:%u: want utime_us and 6 numbers: row skipped, set %u "
+                          "has no truth", s->dir, (unsigned)s->tline, (unsigned)row);
     }
     rp_hal_set_t *set = &s->ready;
     rp_hal_set_clear(set, n);

@@ -160,6 +160,45 @@ static void test_replay_pgm_png_truth(void **state)
     rp_hal_close(src);
 }
 
+/* Given a truth.csv with a malformed row, only that truth is lost: every set comes with its
+ * images, the set whose truth row is malformed without truth and with a message naming
+ * truth.csv's line, the sets after it with theirs. */
+static void test_replay_malformed_truth_row_costs_only_the_truth(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    write_file("frames.csv", "utime_us,cam0\n10,x.pgm\n20,x.pgm\n30,x.pgm\n40,x.pgm\n");
+    write_file("truth.csv", "utime_us,tx,ty,tz,alpha,beta,gamma\n10,1,0,0,0,0,0\n"
+                            "20,2,0,zero,0,0,0\n30,3,0,0,0,0\n40,4,0,0,0,0,0\n");
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    static const int want_truth[4] = {1, 0, 0, 1};
+    static const char *const want_msg[4] = {NULL, "truth.csv:3: want utime_us and 6 numbers",
+                                            "truth.csv:4: want utime_us and 6 numbers", NULL};
+    for (int j = 0; j < 4; j++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_int_equal(set.cam[0].flags, RP_HAL_CAM_OK);
+        check_image(&set.cam[0], 0);
+        assert_int_equal(set.has_truth, want_truth[j]);
+        if (want_truth[j]) {
+            assert_near(set.truth[0], j + 1.0, RP_TOL_TIGHT);
+        }
+        if (want_msg[j] != NULL) {
+            printf("set %d: %s\n", j, rp_hal_errmsg(src));
+            assert_non_null(strstr(rp_hal_errmsg(src), want_msg[j]));
+            assert_non_null(strstr(rp_hal_errmsg(src), "no truth"));
+        } else {
+            assert_string_equal(rp_hal_errmsg(src), "");
+        }
+    }
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    assert_int_equal(rp_hal_stop(src), RP_HAL_OK);
+    rp_hal_close(src);
+}
+
 /* Given frames.csv naming an image that does not exist, the grab fails with E_OPEN naming the
  * file and line, and the next grab goes on with the next row. */
 static void test_replay_missing_image(void **state)
@@ -693,6 +732,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_replay_pgm_png_truth, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_malformed_truth_row_costs_only_the_truth,
+                                        setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_missing_image, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_malformed_csv, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_malformed_images, setup_dir, remove_dir),
