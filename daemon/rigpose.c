@@ -46,6 +46,7 @@
 #include <string.h>
 
 #include "rigpose/rp_config.h"
+#include "rigpose/rp_esc.h"
 #include "rigpose/rp_hal.h"
 #include "rigpose/rp_hal_sim.h"
 #include "rp_args.h"
@@ -104,6 +105,27 @@ static uint32_t g_n_foreign;       /* poses heard from another instance on our p
 static int g_listening;            /* subscribed to our own pose channel (udpm, memq) */
 static int8_t g_said_foreign[32];  /* the other instance last warned about */
 
+/* s with control characters and invalid UTF-8 written \xNN (rp_esc.h), for echoing what a
+ * user or the file gave (paths, URLs, channel and camera names): a message cannot move the
+ * terminal. One of 8 rotating buffers, so several may appear in one printf (main thread only). */
+static const char *esc(const char *s)
+{
+    static char buf[8][4 * RP_CFG_URL_MAX];
+    static unsigned k;
+    char *b = buf[k++ % 8u];
+    rp_esc_text(b, sizeof buf[0], s != NULL ? s : "(null)");
+    return b;
+}
+
+/* This daemon's instance (NUL-padded, not terminated at 32 characters), escaped. */
+static const char *instance_esc(void)
+{
+    char t[sizeof g_instance + 1];
+    memcpy(t, g_instance, sizeof g_instance);
+    t[sizeof g_instance] = '\0';
+    return esc(t);
+}
+
 /* lcm.instance, or HOST:PID. */
 static void instance_init(const char *configured)
 {
@@ -141,9 +163,9 @@ static void on_pose_heard(const lcm_recv_buf_t *rbuf, const char *channel,
         }
         other[sizeof g_instance] = '\0';
         fprintf(stderr, "rigpose: another publisher (instance '%s') sends poses on %s, where this "
-                "daemon ('%.32s') publishes: their poses mix; give each its own "
-                "lcm.pose_channel (counted in status_t.n_foreign_poses)\n", other, channel,
-                (const char *)g_instance);
+                "daemon ('%s') publishes: their poses mix; give each its own "
+                "lcm.pose_channel (counted in status_t.n_foreign_poses)\n", other, esc(channel),
+                instance_esc());
     }
 }
 
@@ -218,7 +240,7 @@ static void say_cam_changes(const rp_hal_set_t *set, int32_t seq)
         }
         g_said_state[k] = st;
         printf("rigpose: set %d: camera %d (%s): %s (reported on the status channel)", seq, k,
-               g_cfg.cam_name[k], cam_state_str(st));
+               esc(g_cfg.cam_name[k]), cam_state_str(st));
         say_not_shown(stdout, &g_say_cam);
         putchar('\n');
     }
@@ -267,13 +289,13 @@ static rp_hal_status_t source_open(const rp_config_t *cfg, rp_hal_source_t **src
     }
     rp_hal_status_t st = rp_hal_open(src, &hc);
     if (st != RP_HAL_OK) {
-        fprintf(stderr, "rigpose: %s: camera source: %s: %s\n", cfg->path,
+        fprintf(stderr, "rigpose: %s: camera source: %s: %s\n", esc(cfg->path),
                 rp_hal_status_str(st), rp_hal_errmsg(NULL));
         return st;
     }
     st = rp_hal_start(*src);
     if (st != RP_HAL_OK) {
-        fprintf(stderr, "rigpose: %s: camera source: %s: %s\n", cfg->path,
+        fprintf(stderr, "rigpose: %s: camera source: %s: %s\n", esc(cfg->path),
                 rp_hal_status_str(st), rp_hal_errmsg(*src));
         rp_hal_close(*src);
         *src = NULL;
@@ -376,7 +398,7 @@ static int print_summary(rp_stats_t *st, const char *channel, const char *stats_
     rp_stats_summary(st, &s);
     printf("rigpose: %u poses published on %s, %.1f sets/s, latency frame->publish p50 %.3f ms, "
            "p99 %.3f ms (all sets, 1 %% bins)%s\n",
-           s.n_poses, channel, s.fps, s.lat_p50_ms, s.lat_p99_ms,
+           s.n_poses, esc(channel), s.fps, s.lat_p50_ms, s.lat_p99_ms,
            g_stop == SIGHUP ? " (stopped by signal SIGHUP)"
            : g_stop == SIGPIPE ? " (stopped by signal SIGPIPE: stdout closed)"
            : g_stop ? " (stopped by signal)" : "");
@@ -391,14 +413,14 @@ static int print_summary(rp_stats_t *st, const char *channel, const char *stats_
     }
     FILE *f = fopen(stats_json, "w");
     if (f == NULL) {
-        fprintf(stderr, "rigpose: %s: %s\n", stats_json, strerror(errno));
+        fprintf(stderr, "rigpose: %s: %s\n", esc(stats_json), strerror(errno));
         return -1;
     }
     fprintf(f, "{\"daemon_latency_ms_p50\": %.4f, \"daemon_latency_ms_p99\": %.4f, "
                "\"daemon_fps\": %.1f}\n",
             s.lat_p50_ms, s.lat_p99_ms, s.fps);
     if (fclose(f) != 0) {
-        fprintf(stderr, "rigpose: %s: %s\n", stats_json, strerror(errno));
+        fprintf(stderr, "rigpose: %s: %s\n", esc(stats_json), strerror(errno));
         return -1;
     }
     return 0;
@@ -412,7 +434,7 @@ static void publish_status(lcm_t *lcm, rigpose_status_t *m)
     m->n_foreign_poses = (int32_t)g_n_foreign;
     const rp_pub_status_t ps = rp_pub_status(lcm, g_cfg.status_channel, m);
     if (ps != RP_PUB_OK) {
-        fprintf(stderr, "rigpose: LCM status on %s: %s\n", g_cfg.status_channel,
+        fprintf(stderr, "rigpose: LCM status on %s: %s\n", esc(g_cfg.status_channel),
                 rp_pub_status_str(ps));
     }
 }
@@ -440,7 +462,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
             g_n_timeouts += hst == RP_HAL_E_TIMEOUT;
             if (hst != RP_HAL_E_TIMEOUT && ++grab_errors > MAX_GRAB_ERRORS) {
                 fprintf(stderr, "rigpose: %s: camera source failed for good (%d failing grabs in "
-                        "a row), the last: %s: %s\n", g_cfg.path, MAX_GRAB_ERRORS + 1,
+                        "a row), the last: %s: %s\n", esc(g_cfg.path), MAX_GRAB_ERRORS + 1,
                         rp_hal_status_str(hst), rp_hal_errmsg(src));
                 return EXIT_SOURCE_FAILED;
             }
@@ -473,7 +495,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
         pm.publish_utime = t_pub;
         const rp_pub_status_t ps = rp_pub_pose(lcm, g_cfg.pose_channel, &pm);
         if (ps != RP_PUB_OK) {
-            fprintf(stderr, "rigpose: LCM publish on %s failed: %s\n", g_cfg.pose_channel,
+            fprintf(stderr, "rigpose: LCM publish on %s failed: %s\n", esc(g_cfg.pose_channel),
                     rp_pub_status_str(ps));
         }
         /* Latency from the frame's capture time, when the source stamps on the HAL clock
@@ -488,14 +510,14 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
                 rp_pub_set_images(lcm, g_cfg.image_channel, &g_set, seq, &bad_cam);
             if (is != RP_PUB_OK) {
                 fprintf(stderr, "rigpose: LCM image of camera %d (%s) on %s: %s\n", bad_cam,
-                        bad_cam >= 0 ? g_cfg.cam_name[bad_cam] : "?", g_cfg.image_channel,
+                        bad_cam >= 0 ? esc(g_cfg.cam_name[bad_cam]) : "?", esc(g_cfg.image_channel),
                         rp_pub_status_str(is));
             }
             const rp_pub_status_t fst = fs == NULL ? RP_PUB_OK
                 : rp_pub_set_features(lcm, g_feat_channel, fs, g_cfg.rig.n_cams, seq, &bad_cam);
             if (fst != RP_PUB_OK) {
                 fprintf(stderr, "rigpose: LCM features of camera %d on %s: %s\n", bad_cam,
-                        g_feat_channel, rp_pub_status_str(fst));
+                        esc(g_feat_channel), rp_pub_status_str(fst));
             }
         }
         const float proc_ms = (float)((double)(t_pub - t_grab) * 1e-3);
@@ -549,7 +571,7 @@ int main(int argc, char **argv)
     if (o.stats_json != NULL) { /* said now, not after the run */
         FILE *f = fopen(o.stats_json, "a");
         if (f == NULL) {
-            fprintf(stderr, "rigpose: --stats-json %s: %s\n", o.stats_json, strerror(errno));
+            fprintf(stderr, "rigpose: --stats-json %s: %s\n", esc(o.stats_json), strerror(errno));
             return EXIT_USAGE;
         }
         fclose(f);
@@ -557,14 +579,14 @@ int main(int argc, char **argv)
 
     const rp_status_t est_st = rp_est_init(&g_est, &g_cfg);
     if (est_st != RP_OK) {
-        fprintf(stderr, "rigpose: %s: method %s refused the configuration: %s\n", o.config,
+        fprintf(stderr, "rigpose: %s: method %s refused the configuration: %s\n", esc(o.config),
                 method_name(&g_cfg), rp_status_str(est_st));
         return EXIT_ESTIMATOR;
     }
 
     lcm_t *lcm = lcm_create(g_cfg.lcm_url);
     if (lcm == NULL) {
-        fprintf(stderr, "rigpose: LCM: cannot use '%s'\n", g_cfg.lcm_url);
+        fprintf(stderr, "rigpose: LCM: cannot use '%s'\n", esc(g_cfg.lcm_url));
         rp_est_close(&g_est);
         return EXIT_LCM;
     }
@@ -595,14 +617,14 @@ int main(int argc, char **argv)
     sigaction(SIGPIPE, &sa, NULL); /* stdout piped into a reader that quit: the same, the
                                     * summary on stderr (main) */
 
-    printf("rigpose: %s: instance '%.32s', source %s, %u cameras, method %s, %u thread%s, "
+    printf("rigpose: %s: instance '%s', source %s, %u cameras, method %s, %u thread%s, "
            "LCM %s (%s, %s)\n",
-           o.config, (const char *)g_instance,
+           esc(o.config), instance_esc(),
            g_cfg.hal.kind == RP_HAL_SRC_SIM ? "sim" : g_cfg.hal.kind == RP_HAL_SRC_V4L2 ? "v4l2"
                                                                                      : "replay",
            g_cfg.rig.n_cams, method_name(&g_cfg), rp_est_threads(&g_est),
-           rp_est_threads(&g_est) == 1 ? "" : "s", g_cfg.lcm_url, g_cfg.pose_channel,
-           g_cfg.status_channel);
+           rp_est_threads(&g_est) == 1 ? "" : "s", esc(g_cfg.lcm_url), esc(g_cfg.pose_channel),
+           esc(g_cfg.status_channel));
     if (!o.quiet) {
         print_header();
     }

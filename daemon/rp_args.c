@@ -3,6 +3,8 @@
  */
 #include "rp_args.h"
 
+#include "rigpose/rp_esc.h"
+
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,6 +30,17 @@ void rp_args_usage(FILE *f)
             "exit codes: 0 done, 1 usage, 2 bad configuration, 3 LCM, 4 source open/start,\n"
             "            5 estimator setup, 6 source failed while running, 7 --stats-json not\n"
             "            written\n");
+}
+
+/* A command-line word as it may be echoed: control characters and invalid UTF-8 as \xNN
+ * (rp_esc.h). Two buffers: a message may quote an option and its value. */
+static const char *esc(const char *s)
+{
+    static char buf[2][1024];
+    static unsigned k;
+    char *b = buf[k++ % 2u];
+    rp_esc_text(b, sizeof buf[0], s);
+    return b;
 }
 
 /* A decimal count 0..2^32-1, nothing else (no sign, no trailing characters). */
@@ -62,14 +75,14 @@ rp_args_status_t rp_args_parse(int argc, char **argv, rp_args_t *o, FILE *err)
         } else if (strcmp(a, "--quiet") == 0) {
             o->quiet = 1;
         } else if (v == NULL) {
-            fprintf(err, "rigpose: %s: unknown option or missing value\n", a);
+            fprintf(err, "rigpose: %s: unknown option or missing value\n", esc(a));
             return RP_ARGS_E_USAGE;
         } else if (strcmp(a, "--config") == 0) {
             o->config = v;
             ++i;
         } else if (strcmp(a, "--frames") == 0) {
             if (parse_u32(v, &o->frames) != 0) {
-                fprintf(err, "rigpose: --frames: '%s' is not a count\n", v);
+                fprintf(err, "rigpose: --frames: '%s' is not a count\n", esc(v));
                 return RP_ARGS_E_USAGE;
             }
             ++i;
@@ -87,14 +100,14 @@ rp_args_status_t rp_args_parse(int argc, char **argv, rp_args_t *o, FILE *err)
             ++i;
         } else if (strcmp(a, "--print-every") == 0) {
             if (parse_u32(v, &o->print_every) != 0 || o->print_every == 0) {
-                fprintf(err, "rigpose: --print-every: '%s' is not a positive count\n", v);
+                fprintf(err, "rigpose: --print-every: '%s' is not a positive count\n", esc(v));
                 return RP_ARGS_E_USAGE;
             }
             ++i;
         } else if (strcmp(a, "--threads") == 0) {
             uint32_t n = 0;
             if (parse_u32(v, &n) != 0 || n > RP_POOL_MAX_THREADS) {
-                fprintf(err, "rigpose: --threads: '%s' is not a count 0..%d\n", v,
+                fprintf(err, "rigpose: --threads: '%s' is not a count 0..%d\n", esc(v),
                         RP_POOL_MAX_THREADS);
                 return RP_ARGS_E_USAGE;
             }
@@ -107,7 +120,7 @@ rp_args_status_t rp_args_parse(int argc, char **argv, rp_args_t *o, FILE *err)
             unsigned cam = 0, from = 0;
             char tail = 0;
             if (sscanf(v, "%u:%u%c", &cam, &from, &tail) != 2 || cam >= RP_MAX_CAMS) {
-                fprintf(err, "rigpose: --sim-drop: '%s' is not CAM:FRAME (CAM < %d)\n", v,
+                fprintf(err, "rigpose: --sim-drop: '%s' is not CAM:FRAME (CAM < %d)\n", esc(v),
                         RP_MAX_CAMS);
                 return RP_ARGS_E_USAGE;
             }
@@ -115,7 +128,7 @@ rp_args_status_t rp_args_parse(int argc, char **argv, rp_args_t *o, FILE *err)
             o->drop_from = from;
             ++i;
         } else {
-            fprintf(err, "rigpose: %s: unknown option (--help)\n", a);
+            fprintf(err, "rigpose: %s: unknown option (--help)\n", esc(a));
             return RP_ARGS_E_USAGE;
         }
     }

@@ -86,6 +86,11 @@ static void test_bad_command_lines_name_the_option(void **state)
         {{"rigpose", "--config", "c", "--bogus", "1", NULL}, "--bogus: unknown option"},
         {{"rigpose", "--config", "c", "--threads", "17", NULL}, "--threads: '17' is not a count"},
         {{"rigpose", "--config", "c", "--threads", "-1", NULL}, "--threads: '-1' is not a count"},
+        /* echoed words cannot move the terminal: control characters written \xNN */
+        {{"rigpose", "--config", "c", "--frames", "1\033[2J\n", NULL},
+         "--frames: '1\\x1b[2J\\x0a' is not a count"},
+        {{"rigpose", "--config", "c", "--\033]0;x\007", "1", NULL},
+         "--\\x1b]0;x\\x07: unknown option"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         rp_args_t a;

@@ -18,7 +18,7 @@
 
 #include "rigpose/rp_camera.h"
 #include "rigpose/rp_rot.h"
-#include "rp_esc_priv.h"
+#include "rigpose/rp_esc.h"
 
 const char *rp_cfg_status_str(rp_cfg_status_t s)
 {
@@ -37,7 +37,7 @@ const char *rp_cfg_status_str(rp_cfg_status_t s)
 
 /* ---- context and error reporting ----------------------------------------------------------- */
 
-/* printf into err (err_len bytes, may be NULL / 0), control characters escaped (rp_esc_priv.h). */
+/* printf into err (err_len bytes, may be NULL / 0), control characters escaped (rp_esc.h). */
 static void set_err(char *err, size_t err_len, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))

@@ -2,7 +2,7 @@
  * rp_hal_common.c - rp_hal_open's dispatch to the sources' tables, status strings, clock, sleep.
  */
 #include "rp_hal_priv.h"
-#include "rp_esc_priv.h"
+#include "rigpose/rp_esc.h"
 
 #include <errno.h>
 #include <stdarg.h>

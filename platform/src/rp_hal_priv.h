@@ -28,7 +28,7 @@ extern const rp_hal_ops_t rp_hal_replay_ops;
 extern const rp_hal_ops_t rp_hal_sim_ops;
 
 /* printf into err (RP_HAL_ERR_MAX bytes), truncating, with control characters and invalid UTF-8
- * escaped as \xNN (rp_esc_priv.h: values echoed from files cannot move the terminal); returns st
+ * escaped as \xNN (rp_esc.h: values echoed from files cannot move the terminal); returns st
  * so a failure is one line:
  * return rp_hal_fail(err, RP_HAL_E_OPEN, "%s: %s", path, strerror(errno)); */
 rp_hal_status_t rp_hal_fail(char *err, rp_hal_status_t st, const char *fmt, ...)

@@ -1,10 +1,10 @@
 /*
- * rp_esc_priv.h - messages that cannot move a terminal: the HAL's and the configuration
+ * rp_esc.h - messages that cannot move a terminal: the HAL's and the configuration
  * parser's messages echo values read from files (paths in frames.csv, YAML scalars), so every
  * message passes through rp_esc_text before anyone prints it.
  */
-#ifndef RP_ESC_PRIV_H
-#define RP_ESC_PRIV_H
+#ifndef RP_ESC_H
+#define RP_ESC_H
 
 #include <stddef.h>
 
@@ -78,4 +78,4 @@ static inline void rp_esc_text(char *dst, size_t cap, const char *src)
     dst[o] = '\0';
 }
 
-#endif /* RP_ESC_PRIV_H */
+#endif /* RP_ESC_H */
