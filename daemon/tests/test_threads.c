@@ -130,6 +130,8 @@ static void test_default_threads_one_per_core_at_most_one_per_tracker(void **sta
     (void)state;
     load_default(); /* stereo4: 4 trackers */
     assert_int_equal(g_cfg.threads, 0);
+    assert_int_equal(rp_est_threads_for(&g_cfg, 64), 1); /* the sim source: features only */
+    g_cfg.hal.kind = RP_HAL_SRC_REPLAY;
     assert_int_equal(rp_est_threads_for(&g_cfg, 1), 1);
     assert_int_equal(rp_est_threads_for(&g_cfg, 2), 2);
     assert_int_equal(rp_est_threads_for(&g_cfg, 64), 4);
