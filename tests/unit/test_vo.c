@@ -129,8 +129,12 @@ static void test_step_status(void **state)
     assert_ok(rp_vo_step_status(RP_OK));
     assert_status(rp_vo_step_status(RP_E_DIVERGED), RP_E_DIVERGED);
     assert_status(rp_vo_step_status(RP_E_TOO_FEW), RP_E_TOO_FEW);
-    assert_status(rp_vo_step_status(RP_E_ARG), RP_E_TOO_FEW);
-    assert_status(rp_vo_step_status(RP_E_NAN), RP_E_TOO_FEW);
+    assert_status(rp_vo_step_status(RP_E_ARG), RP_E_TOO_FEW); /* ARG: a malformed frame set */
+    /* every other failure keeps its code: the caller can tell why the update failed */
+    assert_status(rp_vo_step_status(RP_E_NAN), RP_E_NAN);
+    assert_status(rp_vo_step_status(RP_E_NO_CONVERGE), RP_E_NO_CONVERGE);
+    assert_status(rp_vo_step_status(RP_E_SINGULAR), RP_E_SINGULAR);
+    assert_status(rp_vo_step_status(RP_E_DEGENERATE), RP_E_SINGULAR); /* pipe's: no image */
 }
 
 int main(void)

@@ -192,7 +192,10 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
  *                   rp_pipe_cam_state_t and rp_pipe_info) contributes no features and
  *                   sets RP_EST_DEGRADED; the others go on.
  *   RP_E_TOO_FEW    the estimator could not update (too few features): est is its prediction
- *                   with RP_EST_LOST; the next frame set tries to re-initialise
+ *                   with RP_EST_LOST; the next frame set tries to re-initialise (another
+ *                   failure of the estimator's start or update, with the same outcome, keeps
+ *                   its own code: RP_E_NO_CONVERGE, RP_E_SINGULAR, RP_E_NAN; rp_vo.h's
+ *                   rp_vo_step_status)
  *   RP_E_DIVERGED   the estimator rejected its update and reset its covariance (prediction)
  *   RP_E_DEGENERATE no camera of the layout had a usable image: the estimator ran on no
  *                   features (its prediction to utime, RP_EST_LOST | RP_EST_DEGRADED)

@@ -101,8 +101,13 @@ rp_status_t rp_vo_fill_estimate(const rp_ekf_t *ekf, rp_real t_scale, int64_t ut
                                 uint32_t frame, uint32_t flags, uint16_t n_landmarks,
                                 rp_estimate_t *est);
 
-/* A layout step's status from its filter's: RP_OK and RP_E_DIVERGED as they are, any other
- * failure (too few features, an unusable prediction) RP_E_TOO_FEW. */
+/* A layout step's status from its filter's (the start or the update): each failure keeps its
+ * own code, so a caller can tell them apart (RP_E_TOO_FEW too few features or inliers,
+ * RP_E_DIVERGED a filter fault with the covariance reset, RP_E_NO_CONVERGE Lowe's start did not
+ * converge, RP_E_SINGULAR geometry that does not fix the pose, RP_E_NAN a non-finite state
+ * or measurement...); but RP_E_ARG, which a step's caller reads as a malformed frame set, is
+ * said RP_E_TOO_FEW (the filter refuses arguments only for missing observations), and
+ * RP_E_DEGENERATE, the pipeline's "no usable image" (rp_pipe.h), RP_E_SINGULAR. */
 rp_status_t rp_vo_step_status(rp_status_t filter_st);
 
 /* The bookkeeping a layout's step ends with, once est is filled: *prev_utime = fs->utime,

@@ -196,7 +196,8 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
 
 /* Process one frame set; fills est (never NULL) whatever happens.
  * RP_OK: pose updated, or first frame initialised (est->flags say which).
- * RP_E_TOO_FEW: too few features: est carries the prediction with RP_EST_LOST.
+ * RP_E_TOO_FEW: too few features: est carries the prediction with RP_EST_LOST. Other failures
+ *   of the update keep their own code with the same outcome (rp_vo_step_status).
  * RP_E_DIVERGED: the EKF rejected its update (covariance reset), est as predicted.
  * RP_E_ARG: malformed frame set (count over the limit, features in a camera not in the rig);
  *   it is ignored. Non-finite pixels are skipped. */

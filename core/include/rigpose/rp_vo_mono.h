@@ -105,7 +105,8 @@ rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_m
  * [l_kj, angles of r_kj] in world_k, with its velocity and covariance.
  * Returns as rp_vo_stereo_step: RP_OK (updated, or first frame), RP_E_TOO_FEW (no usable
  * features: prediction, RP_EST_LOST, the next frame re-initialises; a dark camera gives this),
- * RP_E_DIVERGED, RP_E_ARG (malformed frame set: ignored). */
+ * RP_E_DIVERGED, the other failures of the start or update with their own code
+ * (rp_vo_step_status), RP_E_ARG (malformed frame set: ignored). */
 rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estimate_t *est,
                             rp_estimate_t *own);
 

@@ -121,7 +121,9 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
 /* Process one frame set; fills est (never NULL) whatever happens.
  * RP_OK: pose updated, or first frame initialised (est->flags say which).
  * RP_E_TOO_FEW: no usable structure or too few features: est carries the prediction with
- *   RP_EST_LOST; the next frame set tries to re-initialise.
+ *   RP_EST_LOST; the next frame set tries to re-initialise. Other failures of the start or the
+ *   update keep their own code with the same outcome (rp_vo_step_status: RP_E_DIVERGED,
+ *   RP_E_NO_CONVERGE, RP_E_SINGULAR, RP_E_NAN, ...).
  * RP_E_NAN / RP_E_ARG: the frame set was malformed (non-finite pixel, count over the limit);
  *   the offending features are skipped when possible, otherwise the frame set is ignored. */
 rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est);

@@ -144,10 +144,14 @@ rp_status_t rp_vo_fill_estimate(const rp_ekf_t *ekf, rp_real t_scale, int64_t ut
 
 rp_status_t rp_vo_step_status(rp_status_t filter_st)
 {
-    if (filter_st == RP_OK || filter_st == RP_E_DIVERGED) {
-        return filter_st;
+    /* The filter refuses arguments only for observations it was not given (rp_ekf_update: NULL
+     * with n > 0): too few. RP_E_ARG from a step keeps its one meaning, a malformed frame set,
+     * and RP_E_DEGENERATE the pipeline's (rp_pipe.h: no usable image): geometry that does not
+     * fix the pose is said RP_E_SINGULAR. */
+    if (filter_st == RP_E_ARG) {
+        return RP_E_TOO_FEW;
     }
-    return RP_E_TOO_FEW;
+    return filter_st == RP_E_DEGENERATE ? RP_E_SINGULAR : filter_st;
 }
 
 rp_status_t rp_vo_end_step(const rp_frameset_t *fs, uint16_t n_gated, rp_status_t filter_st,
