@@ -18,6 +18,18 @@
 #include "rigpose/rp_stereo.h"
 #include "rigpose/rp_track.h"
 
+/* The matcher built a second time with plain-C lane groups (RP_V8_SCALAR, priv/rp_v8.h), its
+ * public functions renamed, to hold the library's vector kernels (SSE2 / NEON) to bit-identical
+ * matches (test_vector_equals_scalar). */
+#define RP_V8_SCALAR 1
+#define rp_smatch_default_cfg rp_smatch_default_cfg_scalar
+#define rp_smatch_init rp_smatch_init_scalar
+#define rp_smatch_pair rp_smatch_pair_scalar
+#include "../../core/src/frontend/rp_smatch.c"
+#undef rp_smatch_default_cfg
+#undef rp_smatch_init
+#undef rp_smatch_pair
+
 #define W 320
 #define H 240
 
@@ -228,6 +240,44 @@ static void test_general_pair_with_distortion(void **state)
     assert_true(f.epi_max <= f.err_max + 1e-9);
 }
 
+/* Given the verged distorted pair with noise, then the library's matcher (vector kernels where
+ * the compiler has them) and the plain-C build give the same matches, pixels and counts, for
+ * windows whose rows are shorter than, longer than and twice a lane group. */
+static void test_vector_equals_scalar(void **state)
+{
+    (void)state;
+    static rp_smatch_t ss;
+    static rp_feat_t fs[RP_MAX_FEATS_PER_CAM];
+    make_pair(1);
+    const fx_room_t rm = fx_room_default();
+    render_pair(&rm, 4.0);
+    const uint16_t n = detect_left();
+    static const uint8_t half_win[] = {3, 4, 7};
+    int total = 0;
+    for (unsigned k = 0; k < sizeof(half_win); ++k) {
+        rp_smatch_cfg_t cfg;
+        assert_ok(rp_smatch_default_cfg(&cfg));
+        cfg.half_win = half_win[k];
+        assert_ok(rp_smatch_init(&sm, &cfg));
+        assert_ok(rp_smatch_init_scalar(&ss, &cfg));
+        uint16_t nv = 0, ns = 0;
+        rp_smatch_stats_t stv, sts;
+        assert_ok(rp_smatch_pair(&sm, &rig, &sp, &pyr_a, &pyr_b, fa, n, fb,
+                                 RP_MAX_FEATS_PER_CAM, &nv, &stv));
+        assert_ok(rp_smatch_pair_scalar(&ss, &rig, &sp, &pyr_a, &pyr_b, fa, n, fs,
+                                        RP_MAX_FEATS_PER_CAM, &ns, &sts));
+        assert_int_equal(nv, ns);
+        assert_memory_equal(&stv, &sts, sizeof(stv));
+        for (uint16_t i = 0; i < nv; ++i) {
+            assert_int_equal(fb[i].id, fs[i].id);
+            assert_true(fb[i].uv[0] == fs[i].uv[0] && fb[i].uv[1] == fs[i].uv[1]);
+        }
+        total += nv;
+    }
+    print_message("vector == scalar over %d matches\n", total);
+    assert_true(total > 100);
+}
+
 /* Features near the left border whose points lie left of the right camera's view: no match. */
 static void test_no_match_outside_right_view(void **state)
 {
@@ -388,6 +438,7 @@ int main(void)
         cmocka_unit_test(test_front_pair_matches_truth),
         cmocka_unit_test(test_front_pair_noisy),
         cmocka_unit_test(test_general_pair_with_distortion),
+        cmocka_unit_test(test_vector_equals_scalar),
         cmocka_unit_test(test_no_match_outside_right_view),
         cmocka_unit_test(test_repeated_texture_is_ambiguous),
         cmocka_unit_test(test_blank_images_match_nothing),

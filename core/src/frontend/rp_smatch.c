@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "priv/rp_math.h"
+#include "priv/rp_v8.h"
 #include "rigpose/rp_camera.h"
 
 #define Q16 65536
@@ -126,18 +127,29 @@ static int16_t zncc_q15(const win_t *T, const win_t *R)
 
 /* ZNCC (Q15) of template T against the level image's window centred on integer pixel (x, y),
  * in one pass (int32 sums: window <= 15x15, T in Q5 <= 8160, grey <= 255); SCORE_NONE if the
- * window leaves the image, 0 if either side is flat. */
+ * window leaves the image, 0 if either side is flat. The first 8 columns of each row go through
+ * one lane group (priv/rp_v8.h: a lane pair adds at most 2 x 255 x 8160 < 2^22 per row), the
+ * others one by one; the integer sums are the same either way. */
 static int16_t zncc_int(const lev_t *L, int x, int y, const win_t *T)
 {
     const int hw = T->hw, side = 2 * hw + 1;
     if (x - hw < 0 || y - hw < 0 || x + hw >= L->w || y + hw >= L->h) {
         return SCORE_NONE;
     }
+    const int nv = side >= 8 ? 8 : 0; /* columns in the lane group */
+    const v8_t one = v8_set(1);
+    v4_t vs = v4_zero(), vs2 = v4_zero(), vtr = v4_zero();
     int32_t s = 0, s2 = 0, sTR = 0;
     const int16_t *t = T->v;
     for (int r = 0; r < side; ++r) {
         const uint8_t *p = L->p + (size_t)(y - hw + r) * L->w + (x - hw);
-        for (int c = 0; c < side; ++c) {
+        if (nv > 0) {
+            const v8_t q = v8_ld_u8(p);
+            vs = v4_add(vs, v8_madd(q, one));
+            vs2 = v4_add(vs2, v8_madd(q, q));
+            vtr = v4_add(vtr, v8_madd(q, v8_ld(t)));
+        }
+        for (int c = nv; c < side; ++c) {
             const int32_t q = p[c];
             s += q;
             s2 += q * q;
@@ -145,6 +157,9 @@ static int16_t zncc_int(const lev_t *L, int x, int y, const win_t *T)
         }
         t += side;
     }
+    s += (int32_t)v4_sum(vs);
+    s2 += (int32_t)v4_sum(vs2);
+    sTR += (int32_t)v4_sum(vtr);
     const int64_t var = (int64_t)T->n * s2 - (int64_t)s * s;
     if (var <= 0 || !(T->sd > RP_C(0.0))) {
         return 0;
