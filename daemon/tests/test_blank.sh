@@ -10,13 +10,7 @@
 # together.
 set -u
 BUILD=${1:?usage: test_blank.sh BUILD}
-ROOT=$(cd "$(dirname "$0")/../.." && pwd)
-cd "$ROOT"
-REL=$BUILD/release
-PY=${PY:-.venv/bin/python}
-export PYTHONPATH=$BUILD/lcmgen/python
-TMP=$(mktemp -d)
-trap '[ -n "${KEEP:-}" ] || rm -rf "$TMP"' EXIT
+. "$(dirname "$0")/../../tests/script_env.sh"
 
 "$REL/rigpose-render" --out "$TMP/src" --frames 90 --width 320 --height 240 --face-px 256 \
     --ss 1 > "$TMP/render.out" 2>&1 || { cat "$TMP/render.out"; echo "FAIL render"; exit 1; }

@@ -19,12 +19,7 @@ BUILD=${1:?usage: soak.sh BUILD N_FEAT N_IMG [OUT_JSON]}
 N_FEAT=${2:?N_FEAT}
 N_IMG=${3:?N_IMG}
 OUT=${4:-}
-ROOT=$(cd "$(dirname "$0")/../.." && pwd)
-cd "$ROOT"
-REL=$BUILD/release
-PY=${PY:-.venv/bin/python}
-export PYTHONPATH=$BUILD/lcmgen/python
-TMP=$(mktemp -d)
+. "$(dirname "$0")/../script_env.sh"
 trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$TMP"' EXIT
 fail=0
 

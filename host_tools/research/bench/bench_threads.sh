@@ -10,13 +10,7 @@ set -eu
 BUILD=${1:?usage: bench_threads.sh BUILD OUT [FRAMES]}
 OUT=${2:?usage: bench_threads.sh BUILD OUT [FRAMES]}
 FRAMES=${3:-100}
-ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
-cd "$ROOT"
-REL=$BUILD/release
-PY=${PY:-.venv/bin/python}
-export PYTHONPATH=$BUILD/lcmgen/python
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
+. "$(dirname "$0")/../../../tests/script_env.sh"
 
 "$REL/rigpose-render" --out "$TMP/src" --frames "$FRAMES" --ss 1 > "$TMP/render.out" 2>&1 ||
     { cat "$TMP/render.out"; exit 1; }
