@@ -18,7 +18,10 @@
  *               configured size if one is given.
  * Sets come as fast as they are asked for, or with cfg.realtime at their recorded spacing
  * (the first one at once; a gap longer than timeout_ms gives RP_HAL_E_TIMEOUT after timeout_ms
- * and the set comes at a later grab, so grab never blocks longer than timeout_ms). set.utime and each camera's utime are the recorded times; seq is the
+ * and the set comes at a later grab, so grab never blocks longer than timeout_ms), or with
+ * RP_HAL_PACE_LIVE at their recorded times read as HAL clock times (a recording stamped on this
+ * host's CLOCK_MONOTONIC plays like live cameras: several processes reading it deliver each set
+ * at the same moment, and one started late skips the sets due more than timeout_ms ago). set.utime and each camera's utime are the recorded times; seq is the
  * row's index among the data rows. With cfg.partial_sets, a row whose image cannot be read for
  * some cameras is delivered with those cameras MISSING (no image) and RP_HAL_OK, the reason
  * (file:line, camera, file, why) left in the source's message; a row none of whose images can be
@@ -644,15 +647,26 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
             return st;
         }
     }
+    const int64_t limit = (int64_t)s->cfg.timeout_ms * 1000;
+    if (s->cfg.realtime == RP_HAL_PACE_LIVE) {
+        /* A camera never delivers the past: sets due more than timeout_ms ago are skipped. */
+        while (sat_sub(rp_hal_now_us(), s->ready.utime) > limit) {
+            s->have_ready = 0;
+            const rp_hal_status_t st = read_row(s);
+            if (st != RP_HAL_OK) {
+                return st;
+            }
+        }
+    }
     if (s->cfg.realtime) {
         const int64_t u = s->ready.utime;
         if (!s->paced) {
+            /* live: the recorded times are the HAL clock's */
             s->u0 = u;
-            s->clock0 = rp_hal_now_us();
+            s->clock0 = s->cfg.realtime == RP_HAL_PACE_LIVE ? u : rp_hal_now_us();
             s->paced = 1;
         }
         const int64_t wait = sat_sub(sat_add(s->clock0, sat_sub(u, s->u0)), rp_hal_now_us());
-        const int64_t limit = (int64_t)s->cfg.timeout_ms * 1000;
         if (s->cfg.timeout_ms > 0 && wait > limit) { /* a gap in the recording: keep the set */
             rp_hal_sleep_us(limit);
             return rp_hal_fail(s->err, RP_HAL_E_TIMEOUT,
