@@ -1,0 +1,225 @@
+#!/usr/bin/env bash
+# test_frontend.sh BUILD - front ends as separate processes (issue 17 item 2), on this host only
+# (udpm ttl=0, channels tagged with this process's id): four rigpose-frontend processes, one per
+# single camera of method gc, and the daemon with source.kind lcm, on a rendered replay
+# (rigpose-render, 150 sets at 30 Hz, 320x240) whose frames.csv is restamped on this host's
+# CLOCK_MONOTONIC a few seconds ahead and read with source.realtime: live, so that every
+# front end delivers each set at its time like a live camera (and one started late joins the
+# present).
+#   A. every one of the 150 sets gives a pose, equal to the in-process daemon's on the same
+#      frames (source replay, --fast) within 1e-9 in every number, with the same flags and
+#      features used; lcm-logger records the four features channels meanwhile;
+#   B. that recording played back (lcm-logplayer) into a daemon alone gives the same poses again:
+#      an estimator change can be tested on a recording without images;
+#   C. front end 2 killed (SIGKILL) mid-run: the status channel reports camera 2 gone, poses go
+#      on every set from the other three cameras; restarted, it rejoins: camera 2 ok again on the
+#      status channel, and poses use its features again.
+# Prints the distributed run's latency (frame -> pose, daemon --stats-json) for the record.
+set -u
+BUILD=${1:?usage: test_frontend.sh BUILD}
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+cd "$ROOT"
+REL=$BUILD/release
+PY=${PY:-.venv/bin/python}
+export PYTHONPATH=$BUILD/lcmgen/python
+# recv_buf_size: room for seconds of every camera's features in each receiver's socket buffer
+URL='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'
+TAG=F$$_$RANDOM
+TMP=$(mktemp -d)
+PIDS=()
+cleanup() {
+  for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null; done
+  [ -n "${KEEP:-}" ] || rm -rf "$TMP"
+}
+trap cleanup EXIT
+pass=0; fail=0
+ok()  { echo "ok   $1"; pass=$((pass + 1)); }
+bad() { echo "FAIL $1"; fail=$((fail + 1)); }
+finish() {
+  echo "[  PASSED  ] $pass test(s)"
+  [ $fail -eq 0 ] || { echo "[  FAILED  ] $fail test(s)"; exit 1; }
+  exit 0
+}
+
+"$REL/rigpose-render" --out "$TMP/src" --frames 150 --width 320 --height 240 --face-px 256 \
+    --ss 1 > "$TMP/render.out" 2>&1 || { cat "$TMP/render.out"; bad "render"; finish; }
+
+# configs NAME LEAD_S: the rendered rig with method gc on the four single cameras, its frames
+# restamped to start LEAD_S seconds from now on CLOCK_MONOTONIC (Python's time.monotonic),
+# source.realtime live; $TMP/NAME_replay.yaml (front ends, the in-process daemon) and
+# $TMP/NAME_lcm.yaml (the daemon on the front ends' features).
+configs() {
+  "$PY" - "$TMP/src" "$TMP" "$1" "$2" "$TAG" <<'PYEOF'
+import os, re, sys, time
+src, out, name, lead, tag = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4]), sys.argv[5]
+rows = [l.rstrip("\n").split(",") for l in open(os.path.join(src, "frames.csv"))]
+t0 = int(time.monotonic() * 1e6 + lead * 1e6)
+u0 = int(rows[1][0])
+csv = os.path.join(out, name + "_frames.csv")
+with open(csv, "w") as f:
+    f.write(",".join(rows[0]) + "\n")
+    for r in rows[1:]:
+        f.write(",".join([str(t0 + int(r[0]) - u0)] + [os.path.join(src, p) for p in r[1:]]) + "\n")
+y = open(os.path.join(src, "rig.yaml")).read()
+y = y.replace("realtime: false", "realtime: live\n  timeout_ms: 1000")
+y = y.replace("replay_index: frames.csv", "replay_index: " + csv)
+y, n = re.subn(r"method: stereo4\n  pairs: .*\n", "method: gc\n  cams: [cam1, cam2, cam3, cam4]\n", y)
+assert n == 1
+y += "\nlcm: {features_channel: FE_%s_CAM, pose_channel: POSE_%s_%s, status_channel: STATUS_%s_%s}\n" % (
+    tag, tag, name, tag, name)
+open(os.path.join(out, name + "_replay.yaml"), "w").write(y)
+open(os.path.join(out, name + "_lcm.yaml"), "w").write(y.replace("kind: replay", "kind: lcm"))
+PYEOF
+}
+
+# rec NAME REGEX: record channels into $TMP/NAME.log until SIGTERM; REC_PID.
+rec() {
+  rm -f "$TMP/$1.ready"
+  "$PY" daemon/tests/lcm_rec.py --url "$URL" --channels "$2" --out "$TMP/$1.log" \
+      --ready "$TMP/$1.ready" > "$TMP/$1.rec.out" 2>&1 &
+  REC_PID=$!; PIDS+=("$REC_PID")
+  for _ in $(seq 100); do [ -e "$TMP/$1.ready" ] && return 0; sleep 0.1; done
+  cat "$TMP/$1.rec.out"; return 1
+}
+
+# frontend NAME CAM: one front end on the NAME run's replay; FE_PID.
+frontend() {
+  "$REL/rigpose-frontend" --config "$TMP/$1_replay.yaml" --cameras "$2" --lcm-url "$URL" \
+      --quiet >> "$TMP/$1_fe$2.out" 2>&1 &
+  FE_PID=$!; PIDS+=("$FE_PID")
+}
+
+# ---- A. four front ends + the daemon: the in-process run's poses ------------------------------
+configs a 3.0
+rec a_poses "POSE_${TAG}_a|STATUS_${TAG}_a" || { bad "recorder did not start"; finish; }
+A_REC=$REC_PID
+lcm-logger -f --lcm-url="$URL" --channel="FE_${TAG}_CAM.*" "$TMP/feats.lcmlog" \
+    > "$TMP/logger.out" 2>&1 &
+LOGGER=$!; PIDS+=("$LOGGER")
+"$REL/rigpose" --config "$TMP/a_lcm.yaml" --lcm-url "$URL" --quiet --frames 150 \
+    --stats-json "$TMP/a_stats.json" > "$TMP/a_daemon.out" 2>&1 &
+DPID=$!; PIDS+=("$DPID")
+FES=()
+for k in 0 1 2 3; do frontend a $k; FES+=("$FE_PID"); done
+# The in-process daemon on the same frames, meanwhile (as fast as it goes, into a log file).
+"$REL/rigpose" --config "$TMP/a_replay.yaml" --fast --quiet \
+    --lcm-url "file://$TMP/inproc.log?mode=w" > "$TMP/inproc.out" 2>&1 || bad "in-process daemon"
+timeout 60 tail --pid=$DPID -f /dev/null; wait $DPID; drc=$?
+fe_rc=0
+for p in "${FES[@]}"; do wait "$p" || fe_rc=$?; done
+sleep 0.3
+kill -TERM $A_REC; wait $A_REC
+kill -INT $LOGGER; wait $LOGGER 2>/dev/null
+cat "$TMP/a_daemon.out" | tail -3
+[ $drc -eq 0 ] && [ $fe_rc -eq 0 ] && ok "A: daemon (source lcm) and 4 front ends exit 0" \
+  || { bad "A: daemon exit $drc, front ends $fe_rc"; cat "$TMP/a_daemon.out" "$TMP"/a_fe*.out; }
+
+# cmp_poses A B N: the poses of log A (in-process) and log B (channel prefix) set by set.
+cmp_poses() {
+  "$PY" - "$TMP/inproc.log" "$1" "$2" "$3" <<'PYEOF'
+import sys, lcm
+from rigpose import pose_t
+a_log, b_log, b_ch, n = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+A = {p.utime: p for p in (pose_t.decode(e.data) for e in lcm.EventLog(a_log, "r")
+                          if e.channel.startswith("POSE_"))}
+B = [pose_t.decode(e.data) for e in lcm.EventLog(b_log, "r") if e.channel == b_ch]
+nums = lambda p: (list(p.position) + list(p.quaternion) + list(p.angles) + list(p.velocity)
+                  + list(p.angle_rates) + list(p.covariance))
+worst, same, missing = 0.0, 0, 0
+for b in B:
+    a = A.get(b.utime)
+    if a is None:
+        missing += 1
+        continue
+    worst = max(worst, max(abs(x - y) for x, y in zip(nums(a), nums(b))))
+    same += (a.flags == b.flags and list(a.features_used) == list(b.features_used)
+             and a.n_landmarks == b.n_landmarks)
+print("%d poses (in-process %d), %d without an in-process pose, largest difference %.3g, "
+      "%d with the same flags / features used / landmarks" % (len(B), len(A), missing, worst, same))
+seqs = [p.seq for p in B]
+ok = (len(B) == n and len(A) == n and missing == 0 and worst <= 1e-9 and same == n
+      and seqs == list(range(n)))
+sys.exit(0 if ok else 1)
+PYEOF
+}
+cmp_poses "$TMP/a_poses.log" "POSE_${TAG}_a" 150 \
+  && ok "A: 150 poses through the front ends, equal to the in-process run's within 1e-9" \
+  || bad "A: poses differ from the in-process run's"
+"$PY" -c 'import json, sys; d = json.load(open(sys.argv[1])); print("A: latency frame -> pose '\
+'through the front ends: p50 %.3f ms, p99 %.3f ms" % (d["daemon_latency_ms_p50"], '\
+'d["daemon_latency_ms_p99"]))' "$TMP/a_stats.json"
+
+# ---- B. the recorded features into the estimator alone -----------------------------------------
+rec b_poses "POSE_${TAG}_a" || { bad "recorder did not start"; finish; }
+B_REC=$REC_PID
+"$REL/rigpose" --config "$TMP/a_lcm.yaml" --lcm-url "$URL" --quiet --frames 150 \
+    > "$TMP/b_daemon.out" 2>&1 &
+DPID=$!; PIDS+=("$DPID")
+sleep 0.5
+lcm-logplayer --speed=1 --lcm-url="$URL" "$TMP/feats.lcmlog" > "$TMP/player.out" 2>&1
+timeout 10 tail --pid=$DPID -f /dev/null; kill -TERM $DPID 2>/dev/null; wait $DPID; drc=$?
+sleep 0.3
+kill -TERM $B_REC; wait $B_REC
+[ $drc -eq 0 ] && cmp_poses "$TMP/b_poses.log" "POSE_${TAG}_a" 150 \
+  && ok "B: lcm-logger's recording of the features, played into the daemon: the same 150 poses" \
+  || { bad "B: the replayed features (daemon exit $drc)"; tail -5 "$TMP/b_daemon.out"; }
+
+# ---- C. a front end killed and restarted -------------------------------------------------------
+configs c 2.0
+rec c_poses "POSE_${TAG}_c|STATUS_${TAG}_c" || { bad "recorder did not start"; finish; }
+C_REC=$REC_PID
+"$REL/rigpose" --config "$TMP/c_lcm.yaml" --lcm-url "$URL" --quiet \
+    > "$TMP/c_daemon.out" 2>&1 &
+DPID=$!; PIDS+=("$DPID")
+FES=()
+for k in 0 1 3; do frontend c $k; FES+=("$FE_PID"); done
+frontend c 2
+sleep 3.5                        # 2 s to the first set, then 1.5 s: about set 45
+kill -KILL $FE_PID; wait $FE_PID 2>/dev/null
+t_kill=$("$PY" -c 'import time; print(int(time.monotonic() * 1e6))')
+sleep 1.5                        # camera 2 silent for longer than timeout_ms (1 s)
+frontend c 2                     # restarted: it skips the sets already past and joins
+t_back=$("$PY" -c 'import time; print(int(time.monotonic() * 1e6))')
+for p in "${FES[@]}"; do wait "$p"; done
+wait $FE_PID
+sleep 1.5
+kill -TERM $DPID; wait $DPID; drc=$?
+sleep 0.3
+kill -TERM $C_REC; wait $C_REC
+grep -E "camera 2|poses published" "$TMP/c_daemon.out"
+[ $drc -eq 0 ] && ok "C: daemon exit 0 after SIGTERM" || bad "C: daemon exit $drc"
+"$PY" - "$TMP/c_poses.log" "POSE_${TAG}_c" "STATUS_${TAG}_c" "$t_kill" "$t_back" <<'PYEOF'
+import math, sys, lcm
+from rigpose import pose_t, status_t
+log, pch, sch, t_kill, t_back = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+ev = list(lcm.EventLog(log, "r"))
+P = [pose_t.decode(e.data) for e in ev if e.channel == pch]
+S = [status_t.decode(e.data) for e in ev if e.channel == sch]
+fails = []
+def check(name, cond):
+    print(("ok   " if cond else "FAIL ") + name)
+    if not cond:
+        fails.append(name)
+check("C: %d poses, seq 0..%d without a gap, all finite" % (len(P), len(P) - 1),
+      len(P) >= 140 and [p.seq for p in P] == list(range(len(P)))
+      and all(math.isfinite(x) for p in P for x in list(p.position) + list(p.covariance)))
+GONE = status_t.CAM_GONE
+gone = [s for s in S if s.cam_state[2] & GONE]
+check("C: the status channel reports camera 2 gone (%d status messages)" % len(gone), len(gone) > 0)
+gone_t = gone[0].utime if gone else 0
+during = [p for p in P if t_kill < p.utime < t_back]
+check("C: poses go on while it is gone: %d poses between the kill and the restart, none using "
+      "camera 2" % len(during),
+      len(during) >= 30 and all(p.features_used[2] == 0 for p in during[3:])
+      and all(sum(p.features_used) > 0 for p in during))
+back = [s for s in S if s.utime > gone_t and s.cam_state[2] == status_t.CAM_OK]
+check("C: camera 2 ok again on the status channel after the restart", len(back) > 0)
+after = [p for p in P if p.utime > t_back]
+used = [p.seq for p in after if p.features_used[2] > 0]
+check("C: it rejoins: %d of the %d poses after the restart use camera 2's features (first at "
+      "seq %s)" % (len(used), len(after), used[0] if used else None),
+      len(after) >= 20 and len(used) >= len(after) // 2)
+sys.exit(1 if fails else 0)
+PYEOF
+[ $? -eq 0 ] && ok "C: front end killed, reported, poses go on, rejoins" || bad "C: kill / rejoin"
+finish
