@@ -4,7 +4,7 @@
  * source.kind lcm, daemon/rp_lcmsrc.h), on this machine or another.
  *
  *   rigpose-frontend --config FILE --cameras LIST [--frames N] [--lcm-url URL] [--fast]
- *                    [--quiet]
+ *                    [--clock monotonic|realtime] [--quiet]
  *
  * It reads the cameras of LIST (rig indices or names, comma-separated) through the HAL
  * (v4l2 or replay: FILE's source, with only those cameras opened), runs on them the very
@@ -15,6 +15,12 @@
  * stereo layout's front end must own both cameras of each pair it touches (the matcher needs
  * both images). Since the trackers are the pipeline's, the daemon's frame sets are those of the
  * in-process run, and so are its poses (daemon/tests/test_frontend.sh).
+ *
+ * Time: the daemon groups the cameras' frames by capture time, so all front ends must stamp on
+ * one clock. The HAL stamps on this machine's CLOCK_MONOTONIC (v4l2: the kernel's stamps), which
+ * is common to the processes of one machine only; with --clock realtime the front end sends
+ * capture time + (CLOCK_REALTIME - CLOCK_MONOTONIC) read at that moment, the wall clock that
+ * PTP or chrony keeps common to the boards of a robot (daemon/README.md, "Five boards").
  *
  * The pipeline's estimator also runs, on this front end's cameras only, and its estimate is
  * dropped: rp_pipe.h has no entry that runs the trackers and the matcher alone yet.
@@ -31,6 +37,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "rigpose/rp_config.h"
@@ -82,6 +89,9 @@ static void usage(FILE *f)
             "  --frames N       stop after N images per camera (0: until the source ends)\n"
             "  --lcm-url URL    override lcm.url\n"
             "  --fast           replay: as fast as possible (source.realtime: false)\n"
+            "  --clock CLOCK    monotonic (default: the HAL's stamps, one machine) or realtime\n"
+            "                   (the stamps moved to CLOCK_REALTIME: front ends on several\n"
+            "                   boards whose clocks PTP or chrony keeps together)\n"
             "  --quiet          no line per image: only events and the summary\n"
             "exit codes: 0 done, 1 usage, 2 bad configuration, 3 LCM, 4 source open/start,\n"
             "            5 pipeline setup, 6 source failed while running\n");
@@ -222,7 +232,20 @@ static rp_hal_status_t source_open(rp_hal_source_t **src)
 typedef struct {
     uint32_t frames;
     int quiet;
+    int realtime; /* --clock realtime */
 } fe_opts_t;
+
+/* CLOCK_REALTIME - CLOCK_MONOTONIC now, us (the HAL's clock is CLOCK_MONOTONIC). */
+static int64_t realtime_offset_us(void)
+{
+    struct timespec r, m;
+    /* ignored: both clocks exist on every Linux */
+    (void)clock_gettime(CLOCK_MONOTONIC, &m);
+    /* ignored: as above */
+    (void)clock_gettime(CLOCK_REALTIME, &r);
+    return ((int64_t)r.tv_sec - (int64_t)m.tv_sec) * 1000000 +
+           ((int64_t)r.tv_nsec - (int64_t)m.tv_nsec) / 1000;
+}
 
 static int run(const fe_opts_t *o, rp_hal_source_t *src, lcm_t *lcm, uint32_t *n_sets,
                uint32_t *n_failed)
@@ -262,9 +285,10 @@ static int run(const fe_opts_t *o, rp_hal_source_t *src, lcm_t *lcm, uint32_t *n
         const rp_frameset_t *fs = NULL;
         /* ignored: cannot fail: the pipeline was set up */
         (void)rp_pipe_frameset(&g_pipe, &fs);
+        const int64_t stamp = g_set.utime + (o->realtime ? realtime_offset_us() : 0);
         for (uint8_t i = 0; i < g_n_own; ++i) {
             const uint8_t cam = g_cam[i];
-            rp_pub_fill_features(&g_msg, cam, g_set.utime, g_seq[i]++, fs->f[cam], fs->n[cam]);
+            rp_pub_fill_features(&g_msg, cam, stamp, g_seq[i]++, fs->f[cam], fs->n[cam]);
             g_msg.state = (int8_t)(g_set.cam[i].flags &
                                    (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE | RP_HAL_CAM_DROPPED));
             g_msg.drops = (int32_t)g_set.cam[i].drops;
@@ -277,7 +301,7 @@ static int run(const fe_opts_t *o, rp_hal_source_t *src, lcm_t *lcm, uint32_t *n
             }
             if (!o->quiet) {
                 printf("rigpose-frontend: utime %lld camera %u: %d features\n",
-                       (long long)g_set.utime, cam, g_msg.n);
+                       (long long)stamp, cam, g_msg.n);
             }
         }
         (*n_sets)++;
@@ -288,7 +312,7 @@ static int run(const fe_opts_t *o, rp_hal_source_t *src, lcm_t *lcm, uint32_t *n
 int main(int argc, char **argv)
 {
     const char *config = NULL, *cameras = NULL, *url = NULL;
-    fe_opts_t o = {0, 0};
+    fe_opts_t o = {0, 0, 0};
     int fast = 0;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -304,6 +328,10 @@ int main(int argc, char **argv)
             ++i;
         } else if (v != NULL && strcmp(a, "--cameras") == 0) {
             cameras = v;
+            ++i;
+        } else if (v != NULL && strcmp(a, "--clock") == 0 &&
+                   (strcmp(v, "monotonic") == 0 || strcmp(v, "realtime") == 0)) {
+            o.realtime = v[0] == 'r';
             ++i;
         } else if (v != NULL && strcmp(a, "--lcm-url") == 0) {
             url = v;
@@ -401,7 +429,8 @@ int main(int argc, char **argv)
     for (uint8_t i = 0; i < g_n_own; ++i) {
         printf(" %u (%s) on %s", g_cam[i], g_cfg.cam_name[g_cam[i]], g_channel[i]);
     }
-    printf(", method %s, LCM %s\n", rp_pipe_layout_name(g_cfg.pipe.layout), g_cfg.lcm_url);
+    printf(", method %s, LCM %s, stamps on CLOCK_%s\n", rp_pipe_layout_name(g_cfg.pipe.layout),
+           g_cfg.lcm_url, o.realtime ? "REALTIME" : "MONOTONIC");
 
     uint32_t n_sets = 0, n_failed = 0;
     const int code = run(&o, src, lcm, &n_sets, &n_failed);

@@ -44,33 +44,9 @@ finish() {
 "$REL/rigpose-render" --out "$TMP/src" --frames 150 --width 320 --height 240 --face-px 256 \
     --ss 1 > "$TMP/render.out" 2>&1 || { cat "$TMP/render.out"; bad "render"; finish; }
 
-# configs NAME LEAD_S: the rendered rig with method gc on the four single cameras, its frames
-# restamped to start LEAD_S seconds from now on CLOCK_MONOTONIC (Python's time.monotonic),
-# source.realtime live; $TMP/NAME_replay.yaml (front ends, the in-process daemon) and
-# $TMP/NAME_lcm.yaml (the daemon on the front ends' features).
-configs() {
-  "$PY" - "$TMP/src" "$TMP" "$1" "$2" "$TAG" <<'PYEOF'
-import os, re, sys, time
-src, out, name, lead, tag = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4]), sys.argv[5]
-rows = [l.rstrip("\n").split(",") for l in open(os.path.join(src, "frames.csv"))]
-t0 = int(time.monotonic() * 1e6 + lead * 1e6)
-u0 = int(rows[1][0])
-csv = os.path.join(out, name + "_frames.csv")
-with open(csv, "w") as f:
-    f.write(",".join(rows[0]) + "\n")
-    for r in rows[1:]:
-        f.write(",".join([str(t0 + int(r[0]) - u0)] + [os.path.join(src, p) for p in r[1:]]) + "\n")
-y = open(os.path.join(src, "rig.yaml")).read()
-y = y.replace("realtime: false", "realtime: live\n  timeout_ms: 1000")
-y = y.replace("replay_index: frames.csv", "replay_index: " + csv)
-y, n = re.subn(r"method: stereo4\n  pairs: .*\n", "method: gc\n  cams: [cam1, cam2, cam3, cam4]\n", y)
-assert n == 1
-y += "\nlcm: {features_channel: FE_%s_CAM, pose_channel: POSE_%s_%s, status_channel: STATUS_%s_%s}\n" % (
-    tag, tag, name, tag, name)
-open(os.path.join(out, name + "_replay.yaml"), "w").write(y)
-open(os.path.join(out, name + "_lcm.yaml"), "w").write(y.replace("kind: replay", "kind: lcm"))
-PYEOF
-}
+# configs NAME LEAD_S: $TMP/NAME_replay.yaml and NAME_lcm.yaml, the rendered run restamped to
+# start LEAD_S s from now (daemon/tests/restamp.py: method gc, realtime live).
+configs() { "$PY" daemon/tests/restamp.py "$TMP/src" "$TMP" "$1" "$2" "$TAG"; }
 
 # rec NAME REGEX: record channels into $TMP/NAME.log until SIGTERM; REC_PID.
 rec() {
