@@ -54,6 +54,12 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
     }
     const int64_t now = rp_hal_now_us();
     rp_lsrc_cam_t *c = &s->cam[k];
+    if (s->any_out && m->utime <= s->last_out_utime + s->tol_us) {
+        /* Late. Not counted as heard either: a restarted front end catching up on the frames
+         * of the last timeout_ms would otherwise hold every set back until it is current. */
+        s->n_late++;
+        return;
+    }
     if (c->seen && memcmp(c->instance, m->instance, sizeof c->instance) != 0) {
         s->n_restarts++;
     }
@@ -64,10 +70,6 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
     c->seen = 1;
     c->last_rx_us = now;
     memcpy(c->instance, m->instance, sizeof c->instance);
-    if (s->any_out && m->utime <= s->last_out_utime + s->tol_us) {
-        s->n_late++;
-        return;
-    }
     rp_lsrc_pending_t *p = NULL, *free_slot = NULL;
     for (int i = 0; i < RP_LSRC_PENDING; ++i) {
         rp_lsrc_pending_t *q = &s->pend[i];
