@@ -6,6 +6,7 @@
 #   $(ARM)/daemon/rigpose-frontend  aarch64 front end, built by `make cross`
 #   make run-daemon             the daemon on the embedded default, config/sim.yaml
 #   $(BUILD)/bench/daemon.json  latency frame -> LCM publish and sets/s on the simulated rig
+#   $(BUILD)/bench/distributed.json  latency frame -> pose through front-end processes
 #
 # Included before lcm_types/lcm_types.mk (sorted): paths to the generated bindings are spelt out.
 
@@ -96,6 +97,16 @@ $(DMN)/$(1)/test_publish: daemon/tests/test_publish.c daemon/rp_publish.c daemon
 	    $(DMN_LCM)/librigpose_lcm.a $(BUILD)/$(1)/librigpose_sim.a \
 	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) \
 	    -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free -lcmocka -llcm -lstdc++ -lm
+# The lcm source on memq://, fed by the front end's publishing code.
+$(DMN)/$(1)/test_lcmsrc: daemon/tests/test_lcmsrc.c daemon/rp_lcmsrc.c daemon/rp_feats.c \
+                         daemon/rp_publish.c $(DMN_HDRS) tests/rp_test.h $(DMN_LCM)/librigpose_lcm.a \
+                         $(BUILD)/platform/san/librigpose_hal.a \
+                         $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a
+	@mkdir -p $$(dir $$@)
+	$(CC) $(CSTD) $(WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) \
+	    daemon/tests/test_lcmsrc.c daemon/rp_lcmsrc.c daemon/rp_feats.c daemon/rp_publish.c \
+	    $(DMN_LCM)/librigpose_lcm.a $$(DMN_HAL_SAN_LIB) $(BUILD)/$(1)/librigpose_sim.a \
+	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) -lcmocka -llcm $$(HAL_LIBS) -lstdc++ -lm
 endef
 $(foreach v,$(DMN_VARIANTS),$(eval $(call DMN_TEST,$(v))))
 
@@ -127,7 +138,7 @@ $(DMN)/run_test_frontend: daemon/tests/test_frontend.sh daemon/tests/lcm_rec.py
 
 DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est \
                                      $(DMN)/$(v)/test_args $(DMN)/$(v)/test_publish \
-                                     $(DMN)/$(v)/test_stats)
+                                     $(DMN)/$(v)/test_stats $(DMN)/$(v)/test_lcmsrc)
 HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm $(DMN)/run_test_blank $(DMN)/run_test_failures \
                     $(DMN)/run_test_frontend
 SERIAL_TESTS += $(DMN)/run_test_lcm $(DMN)/run_test_frontend
@@ -146,6 +157,14 @@ $(BUILD)/bench/daemon.json: $(REL)/rigpose FORCE
 	@$(PY) -c 'import json, sys; d = json.load(open(sys.argv[1])); \
 	    print("daemon: simulated rig, stereo4, 300 sets as fast as it goes, LCM udpm ttl=0"); \
 	    [print("  %-24s %10.3f" % kv) for kv in d.items()]' $@
+
+# Frame -> pose latency through four rigpose-frontend processes and the daemon (source lcm)
+# against the in-process daemon, on one rendered 640x480 replay played live (the script says how).
+BENCH_PARTS += $(BUILD)/bench/distributed.json
+$(BUILD)/bench/distributed.json: daemon/bench_distributed.sh daemon/tests/restamp.py $(REL)/rigpose \
+                                 $(REL)/rigpose-frontend $(REL)/rigpose-render FORCE
+	@mkdir -p $(dir $@)
+	@daemon/bench_distributed.sh $(BUILD) $@
 
 # ---- aarch64 daemon --------------------------------------------------------------------------------
 # The board's libraries (LCM, libyaml, libpng, libjpeg, zlib) as Debian arm64 packages, fetched
