@@ -8,12 +8,13 @@
  *
  * It reads the cameras of LIST (rig indices or names, comma-separated) through the HAL
  * (v4l2 or replay: FILE's source, with only those cameras opened), runs on them the very
- * trackers and stereo matcher of the in-process daemon, and publishes one rigpose.features_t per camera image on that camera's
- * channel (lcm.features_channel + index, rp_feats.h): its capture time, the camera's frame
- * counter, every tracked feature with its id, position and FEAT_NEW / FEAT_MATCHED flags. A
- * stereo layout's front end must own both cameras of each pair it touches (the matcher needs
- * both images). Since the trackers are the pipeline's, the daemon's frame sets are those of the
- * in-process run, and so are its poses (daemon/tests/test_frontend.sh).
+ * trackers and stereo matcher of the in-process daemon, and publishes one rigpose.features_t
+ * per camera image on that camera's channel (lcm.features_channel + index, rp_feats.h): its
+ * capture time, the camera's frame counter, every tracked feature with its id, position and
+ * FEAT_NEW / FEAT_MATCHED flags. A stereo layout's front end must own both cameras of each
+ * pair it touches (the matcher needs both images). Since the trackers are the pipeline's, the
+ * daemon's frame sets are those of the in-process run, and so are its poses
+ * (daemon/tests/test_frontend.sh).
  *
  * Time: the daemon groups the cameras' frames by capture time, so all front ends must stamp on
  * one clock. The HAL stamps on this machine's CLOCK_MONOTONIC (v4l2: the kernel's stamps), which

@@ -12,9 +12,10 @@
  * each camera of the layout (rp_feats_layout_cams) is in it, or has sent a later frame, or is
  * absent; or when the set has waited timeout_ms since its first message. A camera is absent
  * when nothing came from it for timeout_ms (never heard: once a set has waited timeout_ms for
- * it): sets no longer wait for it, and its state in every set is MISSING | GONE (the status channel's
- * CAM_GONE) until its front end sends again, when it is back in the next set (a restarted front
- * end rejoins). Sets go out in time order; a message for a time at or before a set already out
+ * it): sets no longer wait for it, and its state in every set is MISSING | GONE (the status
+ * channel's CAM_GONE) until its front end sends again, when it is back in the next set (a
+ * restarted front end rejoins). A late message does not count as heard (a restarted front end
+ * catching up does not hold the sets back). Sets go out in time order; a message for a time at or before a set already out
  * is late and dropped (counted).
  *
  * Track ids. A front end restarted (a new instance in its messages) starts its trackers' serials

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""restamp.py SRC OUT NAME LEAD_S TAG - a rendered replay (rigpose-render's folder SRC) made a live
-run of the four single cameras (method gc; the stereo partners cam1b, cam3b left out of the rig,
-so that no process reads images nobody uses) for rigpose-frontend and the daemon:
+"""restamp.py SRC OUT NAME LEAD_S TAG [METHOD] - a rendered replay (rigpose-render's folder SRC)
+made a live run for rigpose-frontend and the daemon, with METHOD gc (default: the four single
+cameras; the stereo partners cam1b, cam3b left out of the rig, so that no process reads images
+nobody uses) or stereo4 (the render's own: both pairs, six cameras):
 
   OUT/NAME_frames.csv   SRC's frames, restamped to start LEAD_S seconds from now on this host's
                         CLOCK_MONOTONIC (Python's time.monotonic), same spacing, absolute paths;
@@ -16,6 +17,8 @@ import sys
 import time
 
 src, out, name, lead, tag = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4]), sys.argv[5]
+method = sys.argv[6] if len(sys.argv) > 6 else "gc"
+assert method in ("gc", "stereo4"), method
 rows = [l.rstrip("\n").split(",") for l in open(os.path.join(src, "frames.csv"))]
 t0 = int(time.monotonic() * 1e6 + lead * 1e6)
 u0 = int(rows[1][0])
@@ -27,10 +30,11 @@ with open(csv, "w") as f:
 y = open(os.path.join(src, "rig.yaml")).read()
 y = y.replace("realtime: false", "realtime: live\n  timeout_ms: 1000")
 y = y.replace("replay_index: frames.csv", "replay_index: " + csv)
-y, n = re.subn(r"method: stereo4\n  pairs: .*\n", "method: gc\n  cams: [cam1, cam2, cam3, cam4]\n", y)
-assert n == 1, "rig.yaml: no stereo4 estimator to replace"
-y, n = re.subn(r"  - name: cam[13]b\n(    .*\n)*", "", y)
-assert n == 2, "rig.yaml: cam1b and cam3b not found"
+if method == "gc":
+    y, n = re.subn(r"method: stereo4\n  pairs: .*\n", "method: gc\n  cams: [cam1, cam2, cam3, cam4]\n", y)
+    assert n == 1, "rig.yaml: no stereo4 estimator to replace"
+    y, n = re.subn(r"  - name: cam[13]b\n(    .*\n)*", "", y)
+    assert n == 2, "rig.yaml: cam1b and cam3b not found"
 y += "\nlcm: {features_channel: FE_%s_CAM, pose_channel: POSE_%s_%s, status_channel: STATUS_%s_%s}\n" % (
     tag, tag, name, tag, name)
 open(os.path.join(out, name + "_replay.yaml"), "w").write(y)

@@ -10,10 +10,14 @@
 #      frames (source replay, --fast) within 1e-9 in every number, with the same flags and
 #      features used; lcm-logger records the four features channels meanwhile;
 #   B. that recording played back (lcm-logplayer) into a daemon alone gives the same poses again:
-#      an estimator change can be tested on a recording without images;
+#      an estimator change can be tested on a recording without images; in it, each camera's
+#      messages count seq 0, 1, ... and FEAT_NEW marks exactly the ids its previous image lacked;
 #   C. front end 2 killed (SIGKILL) mid-run: the status channel reports camera 2 gone, poses go
 #      on every set from the other three cameras; restarted, it rejoins: camera 2 ok again on the
-#      status channel, and poses use its features again.
+#      status channel, and poses use its features again;
+#   D. stereo4 (the render's own method): two front ends, one per stereo pair (--cameras 0,4 and
+#      cam3,cam3b), give the in-process poses too, FEAT_MATCHED marking exactly the ids the pair
+#      partner's image of the same time has; a front end given half a pair is refused.
 # Prints the distributed run's latency (frame -> pose, daemon --stats-json) for the record.
 set -u
 BUILD=${1:?usage: test_frontend.sh BUILD}
@@ -46,7 +50,7 @@ finish() {
 
 # configs NAME LEAD_S: $TMP/NAME_replay.yaml and NAME_lcm.yaml, the rendered run restamped to
 # start LEAD_S s from now (daemon/tests/restamp.py: method gc, realtime live).
-configs() { "$PY" daemon/tests/restamp.py "$TMP/src" "$TMP" "$1" "$2" "$TAG"; }
+configs() { "$PY" daemon/tests/restamp.py "$TMP/src" "$TMP" "$1" "$2" "$TAG" ${3:-gc}; }
 
 # rec NAME REGEX: record channels into $TMP/NAME.log until SIGTERM; REC_PID.
 rec() {
@@ -90,9 +94,10 @@ cat "$TMP/a_daemon.out" | tail -3
 [ $drc -eq 0 ] && [ $fe_rc -eq 0 ] && ok "A: daemon (source lcm) and 4 front ends exit 0" \
   || { bad "A: daemon exit $drc, front ends $fe_rc"; cat "$TMP/a_daemon.out" "$TMP"/a_fe*.out; }
 
-# cmp_poses A B N: the poses of log A (in-process) and log B (channel prefix) set by set.
+# cmp_poses B CHANNEL N [A]: the poses of log B on CHANNEL against the in-process log A
+# ($TMP/inproc.log), set by set.
 cmp_poses() {
-  "$PY" - "$TMP/inproc.log" "$1" "$2" "$3" <<'PYEOF'
+  "$PY" - "${4:-$TMP/inproc.log}" "$1" "$2" "$3" <<'PYEOF'
 import sys, lcm
 from rigpose import pose_t
 a_log, b_log, b_ch, n = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
@@ -139,6 +144,47 @@ kill -TERM $B_REC; wait $B_REC
 [ $drc -eq 0 ] && cmp_poses "$TMP/b_poses.log" "POSE_${TAG}_a" 150 \
   && ok "B: lcm-logger's recording of the features, played into the daemon: the same 150 poses" \
   || { bad "B: the replayed features (daemon exit $drc)"; tail -5 "$TMP/b_daemon.out"; }
+
+# check_flags LOG PAIRS: each camera's messages in LOG count seq 0, 1, ...; FEAT_NEW is set
+# exactly on ids not in the camera's previous message; FEAT_MATCHED exactly on ids in the
+# partner's message of the same utime (PAIRS "a:b,c:d"; none: never set).
+check_flags() {
+  "$PY" - "$1" "$2" <<'PYEOF'
+import sys, lcm
+from rigpose import features_t
+log, pairs = sys.argv[1], sys.argv[2]
+partner = {}
+for p in filter(None, pairs.split(",")):
+    a, b = map(int, p.split(":"))
+    partner[a], partner[b] = b, a
+M = [features_t.decode(e.data) for e in lcm.EventLog(log, "r") if "_CAM" in e.channel]
+by = {}
+for m in M:
+    by.setdefault(m.cam, []).append(m)
+at = {(m.cam, m.utime): set(m.id[:m.n]) for m in M}
+bad, n_new, n_matched, n_feats = [], 0, 0, 0
+for cam, ms in sorted(by.items()):
+    if [m.seq for m in ms] != list(range(len(ms))):
+        bad.append("camera %d: seq not 0, 1, ..." % cam)
+    prev = None
+    for m in ms:
+        q = at.get((partner.get(cam), m.utime), set())
+        for i in range(m.n):
+            new = prev is None or m.id[i] not in prev
+            matched = m.id[i] in q
+            n_new += new; n_matched += matched; n_feats += 1
+            if bool(m.flags[i] & features_t.FEAT_NEW) != new or \
+               bool(m.flags[i] & features_t.FEAT_MATCHED) != matched:
+                bad.append("camera %d seq %d feature %d: flags %d" % (cam, m.seq, i, m.flags[i]))
+        prev = set(m.id[:m.n])
+print("%d messages from %d cameras, %d features: %d FEAT_NEW, %d FEAT_MATCHED, %d wrong"
+      % (len(M), len(by), n_feats, n_new, n_matched, len(bad)), *bad[:3])
+sys.exit(0 if not bad and len(M) > 0 and n_new > 0 and (n_matched > 0) == bool(pairs) else 1)
+PYEOF
+}
+check_flags "$TMP/feats.lcmlog" "" \
+  && ok "B: the recorded features: seq per camera, FEAT_NEW exact, no FEAT_MATCHED (gc)" \
+  || bad "B: the recorded features' seq and flags"
 
 # ---- C. a front end killed and restarted -------------------------------------------------------
 configs c 2.0
@@ -192,10 +238,41 @@ back = [s for s in S if s.utime > gone_t and s.cam_state[2] == status_t.CAM_OK]
 check("C: camera 2 ok again on the status channel after the restart", len(back) > 0)
 after = [p for p in P if p.utime > t_back]
 used = [p.seq for p in after if p.features_used[2] > 0]
-check("C: it rejoins: %d of the %d poses after the restart use camera 2's features (first at "
-      "seq %s)" % (len(used), len(after), used[0] if used else None),
-      len(after) >= 20 and len(used) >= len(after) // 2)
+first = next((p for p in after if p.features_used[2] > 0), None)
+check("C: it rejoins: %d of the %d poses after the restart use camera 2's features, the first "
+      "%s ms after the restart (seq %s), and every one of the last 10"
+      % (len(used), len(after), "%.0f" % ((first.utime - t_back) / 1e3) if first else "-",
+         first.seq if first else None),
+      len(after) >= 20 and len(used) >= 10 and all(p.features_used[2] > 0 for p in after[-10:]))
 sys.exit(1 if fails else 0)
 PYEOF
 [ $? -eq 0 ] && ok "C: front end killed, reported, poses go on, rejoins" || bad "C: kill / rejoin"
+
+# ---- D. stereo4: a front end per stereo pair ------------------------------------------------------
+configs d 2.5 stereo4
+"$REL/rigpose-frontend" --config "$TMP/d_replay.yaml" --cameras 0 --lcm-url memq:// \
+    > "$TMP/d_half.out" 2>&1; hrc=$?
+[ $hrc -eq 1 ] && grep -q "is in a stereo pair with camera 4 (cam1b)" "$TMP/d_half.out" \
+  && ok "D: half a stereo pair refused (exit 1, naming the partner)" \
+  || { bad "D: half a pair: exit $hrc"; cat "$TMP/d_half.out"; }
+rec d_poses "POSE_${TAG}_d|FE_${TAG}_CAM.*" || { bad "recorder did not start"; finish; }
+D_REC=$REC_PID
+"$REL/rigpose" --config "$TMP/d_lcm.yaml" --lcm-url "$URL" --quiet --frames 150 \
+    > "$TMP/d_daemon.out" 2>&1 &
+DPID=$!; PIDS+=("$DPID")
+FES=()
+frontend d 0,4; FES+=("$FE_PID")
+frontend d cam3,cam3b; FES+=("$FE_PID")
+"$REL/rigpose" --config "$TMP/d_replay.yaml" --fast --quiet \
+    --lcm-url "file://$TMP/d_inproc.log?mode=w" > "$TMP/d_inproc.out" 2>&1 || bad "D: in-process"
+timeout 60 tail --pid=$DPID -f /dev/null; wait $DPID; drc=$?
+for p in "${FES[@]}"; do wait "$p"; done
+sleep 0.3
+kill -TERM $D_REC; wait $D_REC
+[ $drc -eq 0 ] && cmp_poses "$TMP/d_poses.log" "POSE_${TAG}_d" 150 "$TMP/d_inproc.log" \
+  && ok "D: stereo4 through two pair front ends: the in-process run's 150 poses" \
+  || { bad "D: stereo4 poses (daemon exit $drc)"; tail -5 "$TMP/d_daemon.out"; }
+check_flags "$TMP/d_poses.log" "0:4,2:5" \
+  && ok "D: the pairs' features: FEAT_NEW and FEAT_MATCHED exact" \
+  || bad "D: the pairs' features' flags"
 finish

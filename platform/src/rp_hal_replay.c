@@ -549,37 +549,46 @@ static int truth_at(replay_src_t *s, int64_t u)
 static rp_hal_status_t read_row(replay_src_t *s)
 {
     const uint8_t n = s->cfg.n_cams;
-    const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
-    if (r == 0) {
-        return rp_hal_fail(s->err, RP_HAL_E_END, "%s: end after %u sets", s->index,
-                           (unsigned)s->row);
-    }
-    if (r < 0) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: %s", s->index,
-                           (unsigned)s->line, line_why(r));
-    }
     char *f[RP_MAX_CAMS + 2];
-    const unsigned k = split(s->buf, f, RP_MAX_CAMS + 1);
     int64_t u = 0;
-    if (k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s:%u: want utime_us and %u image paths", s->index,
-                           (unsigned)s->line, (unsigned)s->n_cols);
+    uint32_t row = 0;
+    for (;;) {
+        const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
+        if (r == 0) {
+            return rp_hal_fail(s->err, RP_HAL_E_END, "%s: end after %u sets", s->index,
+                               (unsigned)s->row);
+        }
+        if (r < 0) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: %s", s->index,
+                               (unsigned)s->line, line_why(r));
+        }
+        const unsigned k = split(s->buf, f, RP_MAX_CAMS + 1);
+        u = 0;
+        if (k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                               "%s:%u: want utime_us and %u image paths", s->index,
+                               (unsigned)s->line, (unsigned)s->n_cols);
+        }
+        if (u < -RP_HAL_UTIME_MAX || u > RP_HAL_UTIME_MAX) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                               "%s:%u: utime_us %" PRId64 " outside +-2^61 us (73,000 "
+                               "years: beyond it the time between two sets overflows)",
+                               s->index, (unsigned)s->line, u);
+        }
+        if (s->any_row && u <= s->last_u) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                               "%s:%u: utime_us %" PRId64 " not after %" PRId64, s->index,
+                               (unsigned)s->line, u, s->last_u);
+        }
+        s->any_row = 1;
+        s->last_u = u;
+        row = s->row++;
+        /* live: a set due more than timeout_ms ago is skipped here, its images never read */
+        if (s->cfg.realtime != RP_HAL_PACE_LIVE ||
+            sat_sub(rp_hal_now_us(), u) <= (int64_t)s->cfg.timeout_ms * 1000) {
+            break;
+        }
     }
-    if (u < -RP_HAL_UTIME_MAX || u > RP_HAL_UTIME_MAX) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s:%u: utime_us %" PRId64 " outside +-2^61 us (73,000 "
-                           "years: beyond it the time between two sets overflows)",
-                           s->index, (unsigned)s->line, u);
-    }
-    if (s->any_row && u <= s->last_u) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s:%u: utime_us %" PRId64 " not after %" PRId64, s->index,
-                           (unsigned)s->line, u, s->last_u);
-    }
-    s->any_row = 1;
-    s->last_u = u;
-    const uint32_t row = s->row++;
     /* Each camera's image; one that cannot be read leaves its camera MISSING in this set. */
     uint8_t ok[RP_MAX_CAMS];
     unsigned n_bad = 0;
