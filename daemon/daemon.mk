@@ -1,9 +1,12 @@
 # daemon/daemon.mk - the rigpose daemon (host and aarch64), its tests and its benchmark section.
 #
 #   $(REL)/rigpose              host daemon (double, Eigen, -O2), built by `make`
+#   $(REL)/rigpose-frontend     host front end (cameras -> features over LCM), built by `make`
 #   $(ARM)/daemon/rigpose       aarch64 daemon (float, Eigen), built by `make cross`
+#   $(ARM)/daemon/rigpose-frontend  aarch64 front end, built by `make cross`
 #   make run-daemon             the daemon on the embedded default, config/sim.yaml
 #   $(BUILD)/bench/daemon.json  latency frame -> LCM publish and sets/s on the simulated rig
+#   $(BUILD)/bench/distributed.json  latency frame -> pose through front-end processes
 #
 # Included before lcm_types/lcm_types.mk (sorted): paths to the generated bindings are spelt out.
 
@@ -11,7 +14,10 @@ DMN := $(BUILD)/daemon
 DMN_LCM := $(BUILD)/lcmgen
 DMN_INC := -Icore/include -Iplatform/include -Iplatform/sim -Idaemon -I$(DMN_LCM)/c
 DMN_WARN := $(WARN) -Wdouble-promotion -Wconversion -Wno-sign-conversion
-DMN_SRC := daemon/rigpose.c daemon/rp_args.c daemon/rp_est.c daemon/rp_publish.c daemon/rp_stats.c
+DMN_SRC := daemon/rigpose.c daemon/rp_args.c daemon/rp_est.c daemon/rp_publish.c daemon/rp_stats.c \
+           daemon/rp_lcmsrc.c daemon/rp_feats.c
+# rigpose-frontend: its main and what it shares with the daemon (messages, channels).
+FE_SRC := daemon/rigpose_frontend.c daemon/rp_feats.c daemon/rp_publish.c
 DMN_HDRS := $(wildcard core/include/rigpose/*.h platform/include/rigpose/*.h daemon/*.h \
                        platform/sim/*.h host_tools/common/*.h)
 # The platform's library (platform/platform.mk): the HAL sources, the sim source and the
@@ -33,7 +39,13 @@ $(REL)/rigpose: $(DMN_REL_OBJ) $(DMN_LCM)/librigpose_lcm.a $(BUILD)/platform/lib
 	$(CC) $(DMN_REL_OBJ) $(DMN_LCM)/librigpose_lcm.a $(DMN_HAL_LIB) $(REL)/librigpose_sim.a \
 	    $(REL)/librigpose_core.a -o $@ $(DMN_LDLIBS)
 
-EXTRA_TOOLS += $(REL)/rigpose
+FE_REL_OBJ := $(patsubst %.c,$(DMN)/rel/%.o,$(FE_SRC))
+$(REL)/rigpose-frontend: $(FE_REL_OBJ) $(DMN_LCM)/librigpose_lcm.a $(BUILD)/platform/librigpose_hal.a \
+                         $(REL)/librigpose_sim.a $(REL)/librigpose_core.a
+	$(CC) $(FE_REL_OBJ) $(DMN_LCM)/librigpose_lcm.a $(DMN_HAL_LIB) $(REL)/librigpose_sim.a \
+	    $(REL)/librigpose_core.a -o $@ $(DMN_LDLIBS)
+
+EXTRA_TOOLS += $(REL)/rigpose $(REL)/rigpose-frontend
 
 .PHONY: run-daemon
 DAEMON_ARGS ?=
@@ -85,6 +97,16 @@ $(DMN)/$(1)/test_publish: daemon/tests/test_publish.c daemon/rp_publish.c daemon
 	    $(DMN_LCM)/librigpose_lcm.a $(BUILD)/$(1)/librigpose_sim.a \
 	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) \
 	    -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free -lcmocka -llcm -lstdc++ -lm
+# The lcm source on memq://, fed by the front end's publishing code.
+$(DMN)/$(1)/test_lcmsrc: daemon/tests/test_lcmsrc.c daemon/rp_lcmsrc.c daemon/rp_feats.c \
+                         daemon/rp_publish.c $(DMN_HDRS) tests/rp_test.h $(DMN_LCM)/librigpose_lcm.a \
+                         $(BUILD)/platform/san/librigpose_hal.a \
+                         $(BUILD)/$(1)/librigpose_sim.a $(BUILD)/$(1)/librigpose_core.a
+	@mkdir -p $$(dir $$@)
+	$(CC) $(CSTD) $(WARN) -D_POSIX_C_SOURCE=200809L $(DMN_INC) -Itests -O1 -g $(SAN) $(VDEF_$(1)) \
+	    daemon/tests/test_lcmsrc.c daemon/rp_lcmsrc.c daemon/rp_feats.c daemon/rp_publish.c \
+	    $(DMN_LCM)/librigpose_lcm.a $$(DMN_HAL_SAN_LIB) $(BUILD)/$(1)/librigpose_sim.a \
+	    $(BUILD)/$(1)/librigpose_core.a -o $$@ $(SAN) -lcmocka -llcm $$(HAL_LIBS) -lstdc++ -lm
 endef
 $(foreach v,$(DMN_VARIANTS),$(eval $(call DMN_TEST,$(v))))
 
@@ -124,14 +146,23 @@ $(DMN)/run_test_failures: daemon/tests/test_failures.sh
 	printf '#!/bin/sh\nexec %s/daemon/tests/test_failures.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
 	chmod +x $@
 
+# Front ends as separate processes: four rigpose-frontend and the daemon with source lcm on a
+# rendered replay, udpm ttl=0 (the multicast group: serial), against the in-process daemon.
+$(DMN)/run_test_frontend: daemon/tests/test_frontend.sh daemon/tests/lcm_rec.py
+	@mkdir -p $(dir $@)
+	printf '#!/bin/sh\nexec %s/daemon/tests/test_frontend.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
+	chmod +x $@
+
 DMN_TESTS := $(foreach v,$(DMN_VARIANTS),$(DMN)/$(v)/test_config $(DMN)/$(v)/test_est \
                                      $(DMN)/$(v)/test_args $(DMN)/$(v)/test_publish \
-                                     $(DMN)/$(v)/test_stats) $(DMN)/tsan/test_threads
+                                     $(DMN)/$(v)/test_stats $(DMN)/$(v)/test_lcmsrc) \
+             $(DMN)/tsan/test_threads
 HOST_EXTRA_TESTS += $(DMN_TESTS) $(DMN)/run_test_lcm $(DMN)/run_test_blank $(DMN)/run_test_failures \
-                    $(DMN)/run_test_threads
-SERIAL_TESTS += $(DMN)/run_test_lcm
+                    $(DMN)/run_test_threads $(DMN)/run_test_frontend
+SERIAL_TESTS += $(DMN)/run_test_lcm $(DMN)/run_test_frontend
 test: $(DMN_TESTS) $(DMN)/run_test_lcm $(DMN)/run_test_blank $(DMN)/run_test_failures \
-      $(DMN)/run_test_threads $(REL)/rigpose $(REL)/rigpose-render $(DMN_LCM)/stamp
+      $(DMN)/run_test_threads $(DMN)/run_test_frontend $(REL)/rigpose $(REL)/rigpose-frontend \
+      $(REL)/rigpose-render $(DMN_LCM)/stamp
 
 # ---- benchmark -----------------------------------------------------------------------------------
 # 300 simulated frame sets as fast as the daemon takes them, published on udpm (ttl=0: this host).
@@ -144,6 +175,14 @@ $(BUILD)/bench/daemon.json: $(REL)/rigpose FORCE
 	@$(PY) -c 'import json, sys; d = json.load(open(sys.argv[1])); \
 	    print("daemon: simulated rig, stereo4, 300 sets as fast as it goes, LCM udpm ttl=0"); \
 	    [print("  %-24s %10.3f" % kv) for kv in d.items()]' $@
+
+# Frame -> pose latency through four rigpose-frontend processes and the daemon (source lcm)
+# against the in-process daemon, on one rendered 640x480 replay played live (the script says how).
+BENCH_PARTS += $(BUILD)/bench/distributed.json
+$(BUILD)/bench/distributed.json: daemon/bench_distributed.sh daemon/tests/restamp.py $(REL)/rigpose \
+                                 $(REL)/rigpose-frontend $(REL)/rigpose-render FORCE
+	@mkdir -p $(dir $@)
+	@daemon/bench_distributed.sh $(BUILD) $@
 
 # ---- aarch64 daemon --------------------------------------------------------------------------------
 # The board's libraries (LCM, libyaml, libpng, libjpeg, zlib) as Debian arm64 packages, fetched
@@ -175,10 +214,19 @@ $(ARM)/daemon/lcm/%.o: $(DMN_LCM)/c/%.c $(DMN_LCM)/stamp $(ARM_SYSROOT)/stamp
 	@mkdir -p $(dir $@)
 	$(CROSS_PREFIX)gcc -std=c99 -O2 -g -Wall -I$(DMN_LCM)/c -idirafter $(ARM_SYSROOT)/usr/include \
 	    -c $< -o $@
+ARM_LDFLAGS = -L$(ARM_SYSLIB) -Wl,-rpath-link,$(ARM_SYSLIB) -Wl,--allow-shlib-undefined \
+    -llcm -lyaml -lpng -ljpeg -lz -lpthread -lstdc++ -lm
 $(ARM)/daemon/rigpose: $(DMN_ARM_OBJ) $(ARM)/float/librigpose_sim.a $(ARM)/float/librigpose_core.a
 	$(CROSS_PREFIX)gcc $(DMN_ARM_OBJ) $(ARM)/float/librigpose_sim.a $(ARM)/float/librigpose_core.a \
-	    -o $@ -L$(ARM_SYSLIB) -Wl,-rpath-link,$(ARM_SYSLIB) -Wl,--allow-shlib-undefined \
-	    -llcm -lyaml -lpng -ljpeg -lz -lpthread -lstdc++ -lm
+	    -o $@ $(ARM_LDFLAGS)
+	@file $@ | sed 's/, BuildID.*//'
+# The front end: its objects and the daemon's platform and LCM objects (no daemon main).
+FE_ARM_OBJ := $(patsubst %.c,$(ARM)/daemon/%.o,$(FE_SRC) $(sort $(wildcard platform/src/*.c))) \
+              $(patsubst lcm_types/%.lcm,$(ARM)/daemon/lcm/%.o,$(wildcard lcm_types/*.lcm))
+$(ARM)/daemon/rigpose-frontend: $(FE_ARM_OBJ) $(ARM)/float/librigpose_sim.a \
+                                $(ARM)/float/librigpose_core.a
+	$(CROSS_PREFIX)gcc $(FE_ARM_OBJ) $(ARM)/float/librigpose_sim.a $(ARM)/float/librigpose_core.a \
+	    -o $@ $(ARM_LDFLAGS)
 	@file $@ | sed 's/, BuildID.*//'
 
-cross: $(ARM)/daemon/rigpose
+cross: $(ARM)/daemon/rigpose $(ARM)/daemon/rigpose-frontend

@@ -5,9 +5,10 @@
  *
  * Each frame set from the configured source becomes one rigpose.pose_t on the pose channel;
  * a rigpose.status_t goes out every lcm.status_every sets and whenever a camera changes state.
- * Every source goes through the HAL's rp_hal_open / rp_hal_grab. Sets of images (v4l2, replay)
- * go through the core's image pipeline (rp_pipe.h); sets of features (sim) go to the same
- * pipeline's estimator directly (rp_est.h). With a source that knows the truth (sim), every printed pose carries its error
+ * Every source goes through the HAL's rp_hal_open / rp_hal_grab, but `lcm` (the features of
+ * rigpose-frontend processes, rp_lcmsrc.h), which has the same shape of calls. Sets of images
+ * (v4l2, replay) go through the core's image pipeline (rp_pipe.h); sets of features (sim, lcm)
+ * go to the same pipeline's estimator directly (rp_est.h). With a source that knows the truth (sim), every printed pose carries its error
  * against it, and the run ends with the mean absolute error per axis (as Table 1 of the paper
  * reports it).
  *
@@ -51,6 +52,7 @@
 #include "rigpose/rp_hal_sim.h"
 #include "rp_args.h"
 #include "rp_est.h"
+#include "rp_lcmsrc.h"
 #include "rp_publish.h"
 #include "rp_stats.h"
 
@@ -79,6 +81,8 @@ static volatile sig_atomic_t g_stop;
 static rp_config_t g_cfg;
 static rp_est_t g_est;      /* the image pipeline: images, or features from the sim source */
 static rp_hal_set_t g_set;
+static rp_lsrc_t g_lsrc;    /* source.kind lcm: frame sets from the front ends' messages */
+static int g_lsrc_open;
 static rp_stats_t g_stats;
 /* The features' channel: the image channel's name + "_FEATURES" (lcm_types/rigpose_features_t). */
 static char g_feat_channel[RP_CFG_CHANNEL_MAX + 16];
@@ -303,8 +307,35 @@ static rp_hal_status_t source_open(const rp_config_t *cfg, rp_hal_source_t **src
     return st;
 }
 
+/* Source kind lcm (not the HAL's): subscribe on the daemon's own LCM. */
+static rp_hal_status_t source_open_lcm(const rp_config_t *cfg, lcm_t *lcm)
+{
+    const rp_hal_status_t st = rp_lsrc_open(&g_lsrc, lcm, cfg);
+    if (st != RP_HAL_OK) {
+        fprintf(stderr, "rigpose: %s: camera source: %s: %s\n", cfg->path,
+                rp_hal_status_str(st), rp_lsrc_errmsg(&g_lsrc));
+        return st;
+    }
+    g_lsrc_open = 1;
+    return RP_HAL_OK;
+}
+
+static rp_hal_status_t source_grab(rp_hal_source_t *src, rp_hal_set_t *set)
+{
+    return g_lsrc_open ? rp_lsrc_grab(&g_lsrc, set) : rp_hal_grab(src, set);
+}
+
+static const char *source_errmsg(const rp_hal_source_t *src)
+{
+    return g_lsrc_open ? rp_lsrc_errmsg(&g_lsrc) : rp_hal_errmsg(src);
+}
+
 static void source_close(rp_hal_source_t *src)
 {
+    if (g_lsrc_open) {
+        rp_lsrc_close(&g_lsrc);
+        g_lsrc_open = 0;
+    }
     if (src != NULL) {
         /* ignored: best effort before closing: the summary follows whatever it says */
         (void)rp_hal_stop(src);
@@ -452,7 +483,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
     while (!g_stop && (o->frames == 0 || g_stats.n_sets < o->frames)) {
         const int32_t seq = (int32_t)g_stats.n_sets;
         const int64_t t_ask = rp_hal_now_us();
-        const rp_hal_status_t hst = rp_hal_grab(src, &g_set);
+        const rp_hal_status_t hst = source_grab(src, &g_set);
         if (hst == RP_HAL_E_END) {
             break;
         }
@@ -463,10 +494,10 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
             if (hst != RP_HAL_E_TIMEOUT && ++grab_errors > MAX_GRAB_ERRORS) {
                 fprintf(stderr, "rigpose: %s: camera source failed for good (%d failing grabs in "
                         "a row), the last: %s: %s\n", esc(g_cfg.path), MAX_GRAB_ERRORS + 1,
-                        rp_hal_status_str(hst), rp_hal_errmsg(src));
+                        rp_hal_status_str(hst), source_errmsg(src));
                 return EXIT_SOURCE_FAILED;
             }
-            say_source(seq, hst, rp_hal_errmsg(src));
+            say_source(seq, hst, source_errmsg(src));
             if (hst == RP_HAL_E_TIMEOUT) { /* the set tells which cameras came */
                 say_cam_changes(&g_set, seq);
             }
@@ -478,9 +509,9 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
             continue;
         }
         grab_errors = 0;
-        if (rp_hal_errmsg(src)[0] != '\0') { /* a degraded set (cameras missing...), and why */
+        if (source_errmsg(src)[0] != '\0') { /* a degraded set (cameras missing...), and why */
             g_n_degraded++;
-            say_source(seq, hst, rp_hal_errmsg(src));
+            say_source(seq, hst, source_errmsg(src));
         }
         say_cam_changes(&g_set, seq);
 
@@ -601,7 +632,8 @@ int main(int argc, char **argv)
     rp_hal_source_t *src = NULL;
     g_cfg.hal.run_jobs = rp_est_hal_jobs; /* each camera's image decoded on the same threads */
     g_cfg.hal.run_jobs_ctx = &g_est;
-    if (source_open(&g_cfg, &src) != RP_HAL_OK) {
+    if ((g_cfg.hal.kind == RP_HAL_SRC_LCM ? source_open_lcm(&g_cfg, lcm)
+                                          : source_open(&g_cfg, &src)) != RP_HAL_OK) {
         lcm_destroy(lcm);
         rp_est_close(&g_est);
         return EXIT_SOURCE;
@@ -620,8 +652,10 @@ int main(int argc, char **argv)
     printf("rigpose: %s: instance '%s', source %s, %u cameras, method %s, %u thread%s, "
            "LCM %s (%s, %s)\n",
            esc(o.config), instance_esc(),
-           g_cfg.hal.kind == RP_HAL_SRC_SIM ? "sim" : g_cfg.hal.kind == RP_HAL_SRC_V4L2 ? "v4l2"
-                                                                                     : "replay",
+           g_cfg.hal.kind == RP_HAL_SRC_SIM    ? "sim"
+           : g_cfg.hal.kind == RP_HAL_SRC_V4L2 ? "v4l2"
+           : g_cfg.hal.kind == RP_HAL_SRC_LCM  ? "lcm (rigpose-frontend features)"
+                                               : "replay",
            g_cfg.rig.n_cams, method_name(&g_cfg), rp_est_threads(&g_est),
            rp_est_threads(&g_est) == 1 ? "" : "s", esc(g_cfg.lcm_url), esc(g_cfg.pose_channel),
            esc(g_cfg.status_channel));

@@ -15,7 +15,7 @@ unsigned rp_est_threads_for(const rp_config_t *cfg, unsigned online_cores)
     if (cfg->threads > 0) {
         return cfg->threads <= RP_POOL_MAX_THREADS ? cfg->threads : RP_POOL_MAX_THREADS;
     }
-    if (cfg->hal.kind == RP_HAL_SRC_SIM) {
+    if (cfg->hal.kind == RP_HAL_SRC_SIM || cfg->hal.kind == RP_HAL_SRC_LCM) {
         return 1; /* features, no images: no tracker runs, no job for another thread */
     }
     /* one per tracker: stereo layouts track both cameras of each pair, gc and rc their

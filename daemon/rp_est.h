@@ -29,7 +29,7 @@ typedef struct {
 
 /* Threads rp_est_init starts for cfg: cfg->threads, or for 0 the online cores, at most one
  * per tracker of the layout (never more than RP_POOL_MAX_THREADS, at least 1), and 1 for the
- * sim source (its sets carry features: no tracker runs). */
+ * sim and lcm sources (their sets carry features: no tracker runs). */
 unsigned rp_est_threads_for(const rp_config_t *cfg, unsigned online_cores);
 
 /* Set up est on cfg's rig with cfg->pipe, unchanged (layout, cameras, tracker and estimator

@@ -32,7 +32,7 @@ static uint8_t g_pose_buf[RP_PUB_POSE_BYTES];
 static uint8_t g_status_buf[RP_PUB_STATUS_BYTES];
 static uint8_t g_image_buf[RP_PUB_IMAGE_BYTES];
 static uint8_t g_feats_buf[RP_PUB_FEATS_BYTES];
-static rigpose_features_t g_feats; /* 6 KB: static, not on the daemon's stack */
+static rigpose_features_t g_feats; /* 11 KB: static, not on the daemon's stack */
 static uint8_t g_pack_buf[RP_HAL_MAX_W * RP_HAL_MAX_H]; /* an image with padded rows, packed */
 
 const char *rp_pub_status_str(rp_pub_status_t s)
@@ -186,6 +186,40 @@ rp_pub_status_t rp_pub_set_images(lcm_t *lcm, const char *channel, const rp_hal_
     return first;
 }
 
+void rp_pub_fill_features(rigpose_features_t *m, uint8_t cam, int64_t utime, int32_t seq,
+                          const rp_feat_t *f, uint16_t n)
+{
+    if (m == NULL) {
+        return;
+    }
+    memset(m, 0, sizeof *m);
+    if (f == NULL || n > RP_PUB_FEATS_MAX) {
+        n = f == NULL ? 0 : (uint16_t)RP_PUB_FEATS_MAX;
+    }
+    m->utime = utime;
+    m->seq = seq;
+    m->cam = (int8_t)cam;
+    m->n = (int16_t)n;
+    for (uint16_t i = 0; i < n; ++i) {
+        m->id[i] = (int32_t)f[i].id;
+        m->u[i] = (double)f[i].uv[0];
+        m->v[i] = (double)f[i].uv[1];
+    }
+}
+
+rp_pub_status_t rp_pub_features(lcm_t *lcm, const char *channel, const rigpose_features_t *m)
+{
+    if (lcm == NULL || channel == NULL || channel[0] == '\0' || m == NULL) {
+        return RP_PUB_E_ARG;
+    }
+    const int bytes = rigpose_features_t_encoded_size(m);
+    if (bytes < 0 || (size_t)bytes > sizeof g_feats_buf) {
+        return RP_PUB_E_SIZE;
+    }
+    return send(lcm, channel, g_feats_buf, bytes,
+                rigpose_features_t_encode(g_feats_buf, 0, (int)sizeof g_feats_buf, m));
+}
+
 rp_pub_status_t rp_pub_set_features(lcm_t *lcm, const char *channel, const rp_frameset_t *fs,
                                     uint8_t n_cams, int32_t seq, int *bad_cam)
 {
@@ -197,26 +231,8 @@ rp_pub_status_t rp_pub_set_features(lcm_t *lcm, const char *channel, const rp_fr
     }
     rp_pub_status_t first = RP_PUB_OK;
     for (uint8_t k = 0; k < n_cams && k < RP_MAX_CAMS; ++k) {
-        rigpose_features_t *m = &g_feats;
-        const uint16_t n = fs->n[k] < RP_PUB_FEATS_MAX ? fs->n[k] : (uint16_t)RP_PUB_FEATS_MAX;
-        m->utime = fs->utime;
-        m->seq = seq;
-        m->cam = (int8_t)k;
-        m->n = (int16_t)n;
-        for (uint16_t i = 0; i < RP_PUB_FEATS_MAX; ++i) {
-            const int used = i < n;
-            m->id[i] = used ? (int32_t)fs->f[k][i].id : 0;
-            m->u[i] = used ? (float)fs->f[k][i].uv[0] : 0.0f;
-            m->v[i] = used ? (float)fs->f[k][i].uv[1] : 0.0f;
-        }
-        rp_pub_status_t st = RP_PUB_OK;
-        const int bytes = rigpose_features_t_encoded_size(m);
-        if (bytes < 0 || (size_t)bytes > sizeof g_feats_buf) {
-            st = RP_PUB_E_SIZE;
-        } else {
-            st = send(lcm, channel, g_feats_buf, bytes,
-                      rigpose_features_t_encode(g_feats_buf, 0, (int)sizeof g_feats_buf, m));
-        }
+        rp_pub_fill_features(&g_feats, k, fs->utime, seq, fs->f[k], fs->n[k]);
+        const rp_pub_status_t st = rp_pub_features(lcm, channel, &g_feats);
         if (st != RP_PUB_OK && first == RP_PUB_OK) {
             first = st;
             if (bad_cam != NULL) {

@@ -48,7 +48,9 @@ const char *rp_pub_status_str(rp_pub_status_t s);
 #define RP_PUB_IMAGE_HEAD_BYTES (RP_PUB_HASH_BYTES + 8 + 4 + 1 + 2 + 2 + 4)
 #define RP_PUB_IMAGE_BYTES (RP_PUB_IMAGE_HEAD_BYTES + (RP_HAL_MAX_W) * (RP_HAL_MAX_H))
 #define RP_PUB_FEATS_MAX 512 /* features_t's arrays */
-#define RP_PUB_FEATS_BYTES (RP_PUB_HASH_BYTES + 8 + 4 + 1 + 2 + (4 + 4 + 4) * RP_PUB_FEATS_MAX)
+#define RP_PUB_FEATS_BYTES                                                                     \
+    (RP_PUB_HASH_BYTES + 8 + 4 + 1 + 1 + 4 + 2 + (4 + 8 + 8 + 1) * RP_PUB_FEATS_MAX +          \
+     RP_PUB_INSTANCE_BYTES)
 
 /* The pose message of one set: est (step status st) for set, pose counter seq, the rig's
  * n_cams and the method (pose_t.METHOD_*). publish_utime is left 0: the caller stamps it just
@@ -66,6 +68,14 @@ rp_pub_status_t rp_pub_image(lcm_t *lcm, const char *channel, const rigpose_imag
  * camera in *bad_cam (optional, -1 if none). */
 rp_pub_status_t rp_pub_set_images(lcm_t *lcm, const char *channel, const rp_hal_set_t *set,
                                   int32_t seq, int *bad_cam);
+
+/* One camera's features f[0..n-1] (cut at RP_PUB_FEATS_MAX) into m, the unused entries zero;
+ * state, drops, flags[] and instance zero (a front end sets them). */
+void rp_pub_fill_features(rigpose_features_t *m, uint8_t cam, int64_t utime, int32_t seq,
+                          const rp_feat_t *f, uint16_t n);
+
+/* Encode m into the type's static buffer and lcm_publish it on channel. */
+rp_pub_status_t rp_pub_features(lcm_t *lcm, const char *channel, const rigpose_features_t *m);
 
 /* The features of fs (the set the estimator used) as one rigpose_features_t per camera
  * 0..n_cams-1 on channel, tagged with seq; a camera's features past RP_PUB_FEATS_MAX are cut.

@@ -15,7 +15,8 @@ RP_STATIC_ASSERT(RIGPOSE_STATUS_T_CAM_MISSING == RP_HAL_CAM_MISSING &&
                  "status_t.CAM_* are RP_HAL_CAM_*");
 RP_STATIC_ASSERT(RIGPOSE_STATUS_T_SOURCE_V4L2 == RP_HAL_SRC_V4L2 &&
                      RIGPOSE_STATUS_T_SOURCE_REPLAY == RP_HAL_SRC_REPLAY &&
-                     RIGPOSE_STATUS_T_SOURCE_SIM == RP_HAL_SRC_SIM,
+                     RIGPOSE_STATUS_T_SOURCE_SIM == RP_HAL_SRC_SIM &&
+                     RIGPOSE_STATUS_T_SOURCE_LCM == RP_HAL_SRC_LCM,
                  "status_t.SOURCE_* are rp_hal_kind_t");
 
 rp_status_t rp_stats_init(rp_stats_t *s, rp_hal_kind_t source, int8_t method, uint8_t n_cams,

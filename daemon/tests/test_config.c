@@ -259,7 +259,13 @@ static const bad_case_t bad[] = {
      "bad.yaml:18: cameras[1].distorsion: unknown key"},
     /* impossible values */
     {1, "version: 2", RP_CFG_E_RANGE, "bad.yaml:1: version: 2 is outside 1..1"},
-    {3, "  kind: usb", RP_CFG_E_RANGE, "bad.yaml:3: source.kind: 'usb' is not one of"},
+    {3, "  kind: usb", RP_CFG_E_RANGE, "bad.yaml:3: source.kind: 'usb' is not one of sim, v4l2, "
+     "replay, lcm"},
+    {4, "  realtime: soon", RP_CFG_E_TYPE,
+     "bad.yaml:4: source.realtime: expected true, false or live"},
+    {25, "  features_channel: "
+         "F_THIRTY_TWO_CHARACTERS_XXXXXXXXX_THIRTY_TWO_CHARACTERS_XXXXXXXX",
+     RP_CFG_E_RANGE, "bad.yaml:25: lcm.features_channel:"},
     {4, "  timeout_ms: 0", RP_CFG_E_RANGE, "bad.yaml:4: source.timeout_ms: 0 is outside"},
     {8, "    width: 1000", RP_CFG_E_RANGE, "bad.yaml:6: cameras[0].width: 1000x480 is larger"},
     {10, "    intrinsics: [-500, 500, 320, 240]", RP_CFG_E_RANGE,
@@ -538,6 +544,39 @@ static void test_replay_index_is_relative_to_the_file(void **state)
     assert_int_equal(rp_config_parse(t, strlen(t), "runs/a/rig.yaml", &g_cfg, g_err, sizeof g_err),
                      RP_CFG_OK);
     assert_string_equal(g_cfg.hal.replay_index, "/data/frames.csv");
+}
+
+/* The front ends' and the estimator's keys: source.kind lcm, realtime live, and each camera's
+ * features channel (lcm.features_channel + index). */
+static void test_distributed_keys(void **state)
+{
+    (void)state;
+    const char *t = edited(3, "  kind: lcm");
+    assert_int_equal(parse(t), RP_CFG_OK);
+    assert_int_equal(g_cfg.hal.kind, RP_HAL_SRC_LCM);
+    assert_string_equal(g_cfg.features_channel, "RIGPOSE_FEATURES_CAM");
+    assert_int_equal(g_cfg.hal.realtime, RP_HAL_PACE_FAST);
+    t = edited(4, "  realtime: live");
+    assert_int_equal(parse(t), RP_CFG_OK);
+    assert_int_equal(g_cfg.hal.realtime, RP_HAL_PACE_LIVE);
+    t = edited(4, "  realtime: true");
+    assert_int_equal(parse(t), RP_CFG_OK);
+    assert_int_equal(g_cfg.hal.realtime, RP_HAL_PACE_SPACED);
+    t = edited(25, "  features_channel: FE_CAM");
+    assert_int_equal(parse(t), RP_CFG_OK);
+    assert_string_equal(g_cfg.features_channel, "FE_CAM");
+    /* the longest prefix leaves room for one digit and the NUL */
+    static char longest[RP_CFG_CHANNEL_MAX + 32];
+    const int head = snprintf(longest, sizeof longest, "  features_channel: ");
+    memset(longest + head, 'F', RP_CFG_CHANNEL_MAX - 2);
+    longest[head + RP_CFG_CHANNEL_MAX - 2] = '\0';
+    t = edited(25, longest);
+    assert_int_equal(parse(t), RP_CFG_OK);
+    assert_int_equal(strlen(g_cfg.features_channel), RP_CFG_CHANNEL_MAX - 2);
+    longest[head + RP_CFG_CHANNEL_MAX - 2] = 'F';
+    longest[head + RP_CFG_CHANNEL_MAX - 1] = '\0';
+    t = edited(25, longest);
+    assert_int_equal(parse(t), RP_CFG_E_RANGE);
 }
 
 /* The non-overlapping methods pick their cameras by name (cam1..cam4) or from `cams`. */
@@ -996,6 +1035,7 @@ int main(void)
         cmocka_unit_test(test_intrinsics_range),
         cmocka_unit_test(test_distortion_folding_inside_the_image),
         cmocka_unit_test(test_replay_index_is_relative_to_the_file),
+        cmocka_unit_test(test_distributed_keys),
         cmocka_unit_test(test_single_camera_methods),
         cmocka_unit_test(test_truncated_files_never_crash),
         cmocka_unit_test(test_corrupted_files_never_crash),

@@ -246,8 +246,9 @@ static void test_one_sets_publish_path_allocates_nothing(void **state)
     lcm_destroy(lcm);
 }
 
-/* rigpose_features_t: every camera's tracked features reach a subscriber, cut at 512, and
- * publishing them allocates nothing. */
+/* rigpose_features_t: every camera's tracked features reach a subscriber, cut at 512, the
+ * positions exactly as the estimator has them (Q16 fractions of a 640-px image: 26 significant
+ * bits, more than a float's 24), and publishing them allocates nothing. */
 typedef struct {
     unsigned n;
     rigpose_features_t m[2];
@@ -270,11 +271,11 @@ static void test_features_reach_a_subscriber_without_allocating(void **state)
     fs.n[1] = RP_MAX_FEATS_PER_CAM;
     for (uint16_t i = 0; i < RP_MAX_FEATS_PER_CAM; ++i) {
         fs.f[0][i].id = 1000u + i;
-        fs.f[0][i].uv[0] = (rp_real)(10 + i);
-        fs.f[0][i].uv[1] = (rp_real)(20 + i);
+        fs.f[0][i].uv[0] = (rp_real)(10 + i) + (rp_real)(i + 1) / (rp_real)65536;
+        fs.f[0][i].uv[1] = (rp_real)(20 + i) - (rp_real)(i + 3) / (rp_real)65536;
         fs.f[1][i].id = 5000u + i;
         fs.f[1][i].uv[0] = (rp_real)0.5;
-        fs.f[1][i].uv[1] = (rp_real)i;
+        fs.f[1][i].uv[1] = (rp_real)i + (rp_real)(i + 1) / (rp_real)65536;
     }
     rigpose_features_t empty;
     memset(&empty, 0, sizeof empty);
@@ -300,13 +301,19 @@ static void test_features_reach_a_subscriber_without_allocating(void **state)
     assert_true(rx.m[0].utime == 123456);
     assert_int_equal(rx.m[0].n, 3);
     assert_int_equal(rx.m[0].id[2], 1002);
-    assert_near(rx.m[0].u[2], 12.0, 1e-6);
-    assert_near(rx.m[0].v[2], 22.0, 1e-6);
+    assert_true(rx.m[0].u[2] == (double)fs.f[0][2].uv[0]);
+    assert_true(rx.m[0].v[2] == (double)fs.f[0][2].uv[1]);
+    assert_near(rx.m[0].u[2], 12.0 + 3.0 / 65536, 1e-6);
+    assert_int_equal(rx.m[0].flags[0], 0);
+    assert_int_equal(rx.m[0].state, 0);
     assert_int_equal(rx.m[0].id[3], 0); /* past n: zero */
     assert_int_equal(rx.m[1].cam, 1);
     assert_int_equal(rx.m[1].n, RP_MAX_FEATS_PER_CAM < RP_PUB_FEATS_MAX ? RP_MAX_FEATS_PER_CAM
                                                                       : RP_PUB_FEATS_MAX);
-    assert_near(rx.m[1].v[rx.m[1].n - 1], (double)(rx.m[1].n - 1), 1e-6);
+    assert_near(rx.m[1].v[rx.m[1].n - 1], (double)(rx.m[1].n - 1), 1e-2);
+    /* 510 + 511 / 65536: 25 significant bits, more than a float's 24 (exact with double
+     * rp_real; with float rp_real the value itself is the float's) */
+    assert_true(rx.m[1].v[510] == (double)fs.f[1][510].uv[1]);
     assert_int_equal(rp_pub_set_features(lcm, "", &fs, 2, 0, &bad_cam), RP_PUB_E_ARG);
     assert_int_equal(rp_pub_set_features(lcm, "X", NULL, 2, 0, &bad_cam), RP_PUB_E_ARG);
     lcm_destroy(lcm);

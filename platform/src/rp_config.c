@@ -641,6 +641,22 @@ static int resolve_path(ctx_t *c, const yaml_node_t *at, const char *rel, char *
     return 0;
 }
 
+/* source.realtime: true / false, or live (RP_HAL_PACE_*). */
+static int get_pace(ctx_t *c, const yaml_node_t *m, uint8_t *out)
+{
+    const yaml_node_t *n = map_get(c, m, "realtime");
+    if (n != NULL && is_plain_scalar(n) && strcmp(scalar(n), "live") == 0) {
+        *out = RP_HAL_PACE_LIVE;
+        return 0;
+    }
+    if (n != NULL && n->type == YAML_SCALAR_NODE && !(is_plain_scalar(n) &&
+        (strcmp(scalar(n), "true") == 0 || strcmp(scalar(n), "True") == 0 ||
+         strcmp(scalar(n), "false") == 0 || strcmp(scalar(n), "False") == 0))) {
+        return fail(c, RP_CFG_E_TYPE, n, "source.realtime", "expected true, false or live");
+    }
+    return get_bool(c, m, "source", "realtime", 0, out);
+}
+
 static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 {
     static const char *const known[] = {"kind",     "timeout_ms",   "sync_tol_us", "retry_ms",
@@ -656,7 +672,7 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         get_int(c, m, "source", "timeout_ms", 0, 1000, 1, 60000, &to) ||
         get_int(c, m, "source", "sync_tol_us", 0, 5000, 0, 1000000, &tol) ||
         get_int(c, m, "source", "retry_ms", 0, 1000, 10, 60000, &retry) ||
-        get_bool(c, m, "source", "realtime", 0, &cfg->hal.realtime) ||
+        get_pace(c, m, &cfg->hal.realtime) ||
         get_str(c, m, "source", "replay_index", 0, "", 0, rel, sizeof rel) ||
         get_map(c, m, "source", "sim", 0, &sm)) {
         return -1;
@@ -667,9 +683,11 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         cfg->hal.kind = RP_HAL_SRC_V4L2;
     } else if (strcmp(kind, "replay") == 0) {
         cfg->hal.kind = RP_HAL_SRC_REPLAY;
+    } else if (strcmp(kind, "lcm") == 0) {
+        cfg->hal.kind = RP_HAL_SRC_LCM;
     } else {
         return fail(c, RP_CFG_E_RANGE, map_get(c, m, "kind"), "source.kind",
-                    "'%s' is not one of sim, v4l2, replay", kind);
+                    "'%s' is not one of sim, v4l2, replay, lcm", kind);
     }
     cfg->hal.timeout_ms = (uint32_t)to;
     cfg->hal.sync_tol_us = tol;
@@ -1052,7 +1070,8 @@ static int parse_tracker(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 static int parse_lcm(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 {
     static const char *const known[] = {"url", "pose_channel", "status_channel", "status_every",
-                                        "image_channel", "instance", NULL};
+                                        "image_channel", "instance", "features_channel",
+                                        NULL};
     const char *P = "lcm";
     static const yaml_node_t none = {.type = YAML_MAPPING_NODE};
     yaml_node_t *m;
@@ -1071,6 +1090,8 @@ static int parse_lcm(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         get_str(c, mm, P, "image_channel", 0, "", 1, cfg->image_channel,
                 sizeof cfg->image_channel) ||
         get_str(c, mm, P, "instance", 0, "", 1, cfg->instance, sizeof cfg->instance) ||
+        get_str(c, mm, P, "features_channel", 0, "RIGPOSE_FEATURES_CAM", 0,
+                cfg->features_channel, sizeof cfg->features_channel - 1) ||
         get_int(c, mm, P, "status_every", 0, 1, 1, 10000, &every)) {
         return -1;
     }

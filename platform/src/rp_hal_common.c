@@ -78,6 +78,9 @@ rp_hal_status_t rp_hal_open(rp_hal_source_t **src, const rp_hal_cfg_t *cfg)
     case RP_HAL_SRC_V4L2: ops = &rp_hal_v4l2_ops; break;
     case RP_HAL_SRC_REPLAY: ops = &rp_hal_replay_ops; break;
     case RP_HAL_SRC_SIM: ops = &rp_hal_sim_ops; break;
+    case RP_HAL_SRC_LCM:
+        return rp_hal_fail(g_src.err, RP_HAL_E_ARG, "source kind lcm is the daemon's "
+                           "(rigpose-frontend messages), not a HAL source");
     }
     if (ops == NULL) {
         return rp_hal_fail(g_src.err, RP_HAL_E_ARG, "unknown source kind %d", (int)cfg->kind);

@@ -20,7 +20,10 @@
  *               configured size if one is given.
  * Sets come as fast as they are asked for, or with cfg.realtime at their recorded spacing
  * (the first one at once; a gap longer than timeout_ms gives RP_HAL_E_TIMEOUT after timeout_ms
- * and the set comes at a later grab, so grab never blocks longer than timeout_ms). set.utime and each camera's utime are the recorded times; seq is the
+ * and the set comes at a later grab, so grab never blocks longer than timeout_ms), or with
+ * RP_HAL_PACE_LIVE at their recorded times read as HAL clock times (a recording stamped on this
+ * host's CLOCK_MONOTONIC plays like live cameras: several processes reading it deliver each set
+ * at the same moment, and one started late skips the sets due more than timeout_ms ago). set.utime and each camera's utime are the recorded times; seq is the
  * row's index among the data rows. With cfg.partial_sets, a row whose image cannot be read for
  * some cameras is delivered with those cameras MISSING (no image) and RP_HAL_OK, the reason
  * (file:line, camera, file, why) left in the source's message; a row none of whose images can be
@@ -566,37 +569,46 @@ static int truth_at(replay_src_t *s, int64_t u)
 static rp_hal_status_t read_row(replay_src_t *s)
 {
     const uint8_t n = s->cfg.n_cams;
-    const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
-    if (r == 0) {
-        return rp_hal_fail(s->err, RP_HAL_E_END, "%s: end after %u sets", s->index,
-                           (unsigned)s->row);
-    }
-    if (r < 0) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: %s", s->index,
-                           (unsigned)s->line, line_why(r));
-    }
     char *f[RP_MAX_CAMS + 2];
-    const unsigned k = split(s->buf, f, RP_MAX_CAMS + 1);
     int64_t u = 0;
-    if (k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s:%u: want utime_us and %u image paths", s->index,
-                           (unsigned)s->line, (unsigned)s->n_cols);
+    uint32_t row = 0;
+    for (;;) {
+        const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
+        if (r == 0) {
+            return rp_hal_fail(s->err, RP_HAL_E_END, "%s: end after %u sets", s->index,
+                               (unsigned)s->row);
+        }
+        if (r < 0) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: %s", s->index,
+                               (unsigned)s->line, line_why(r));
+        }
+        const unsigned k = split(s->buf, f, RP_MAX_CAMS + 1);
+        u = 0;
+        if (k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                               "%s:%u: want utime_us and %u image paths", s->index,
+                               (unsigned)s->line, (unsigned)s->n_cols);
+        }
+        if (u < -RP_HAL_UTIME_MAX || u > RP_HAL_UTIME_MAX) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                               "%s:%u: utime_us %" PRId64 " outside +-2^61 us (73,000 "
+                               "years: beyond it the time between two sets overflows)",
+                               s->index, (unsigned)s->line, u);
+        }
+        if (s->any_row && u <= s->last_u) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                               "%s:%u: utime_us %" PRId64 " not after %" PRId64, s->index,
+                               (unsigned)s->line, u, s->last_u);
+        }
+        s->any_row = 1;
+        s->last_u = u;
+        row = s->row++;
+        /* live: a set due more than timeout_ms ago is skipped here, its images never read */
+        if (s->cfg.realtime != RP_HAL_PACE_LIVE ||
+            sat_sub(rp_hal_now_us(), u) <= (int64_t)s->cfg.timeout_ms * 1000) {
+            break;
+        }
     }
-    if (u < -RP_HAL_UTIME_MAX || u > RP_HAL_UTIME_MAX) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s:%u: utime_us %" PRId64 " outside +-2^61 us (73,000 "
-                           "years: beyond it the time between two sets overflows)",
-                           s->index, (unsigned)s->line, u);
-    }
-    if (s->any_row && u <= s->last_u) {
-        return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                           "%s:%u: utime_us %" PRId64 " not after %" PRId64, s->index,
-                           (unsigned)s->line, u, s->last_u);
-    }
-    s->any_row = 1;
-    s->last_u = u;
-    const uint32_t row = s->row++;
     /* Each camera's image; one that cannot be read leaves its camera MISSING in this set. */
     uint8_t ok[RP_MAX_CAMS];
     unsigned n_bad = 0;
@@ -676,15 +688,26 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
             return st;
         }
     }
+    const int64_t limit = (int64_t)s->cfg.timeout_ms * 1000;
+    if (s->cfg.realtime == RP_HAL_PACE_LIVE) {
+        /* A camera never delivers the past: sets due more than timeout_ms ago are skipped. */
+        while (sat_sub(rp_hal_now_us(), s->ready.utime) > limit) {
+            s->have_ready = 0;
+            const rp_hal_status_t st = read_row(s);
+            if (st != RP_HAL_OK) {
+                return st;
+            }
+        }
+    }
     if (s->cfg.realtime) {
         const int64_t u = s->ready.utime;
         if (!s->paced) {
+            /* live: the recorded times are the HAL clock's */
             s->u0 = u;
-            s->clock0 = rp_hal_now_us();
+            s->clock0 = s->cfg.realtime == RP_HAL_PACE_LIVE ? u : rp_hal_now_us();
             s->paced = 1;
         }
         const int64_t wait = sat_sub(sat_add(s->clock0, sat_sub(u, s->u0)), rp_hal_now_us());
-        const int64_t limit = (int64_t)s->cfg.timeout_ms * 1000;
         if (s->cfg.timeout_ms > 0 && wait > limit) { /* a gap in the recording: keep the set */
             rp_hal_sleep_us(limit);
             return rp_hal_fail(s->err, RP_HAL_E_TIMEOUT,

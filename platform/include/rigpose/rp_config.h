@@ -84,6 +84,10 @@ typedef struct {
     char status_channel[RP_CFG_CHANNEL_MAX];
     char image_channel[RP_CFG_CHANNEL_MAX]; /* "" = images not published */
     uint32_t status_every;                  /* frame sets between status messages, >= 1 */
+    char features_channel[RP_CFG_CHANNEL_MAX]; /* lcm.features_channel: rigpose-frontend
+                                             * publishes camera k's features on this + "k"
+                                             * (the daemon with source.kind lcm listens);
+                                             * at most RP_CFG_CHANNEL_MAX - 2 characters */
     char instance[32];                      /* lcm.instance: who publishes (pose_t.instance);
                                              * "" = the daemon's default, HOST:PID */
     uint8_t threads;                        /* threads of the image front end in all, the

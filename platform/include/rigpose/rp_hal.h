@@ -43,7 +43,25 @@ typedef enum {
 
 const char *rp_hal_status_str(rp_hal_status_t s);
 
-typedef enum { RP_HAL_SRC_V4L2 = 0, RP_HAL_SRC_REPLAY, RP_HAL_SRC_SIM } rp_hal_kind_t;
+/* RP_HAL_SRC_LCM: feature messages of rigpose-frontend processes over LCM. Not a HAL source
+ * (the HAL does not link LCM; rp_hal_open refuses it): the daemon's own (daemon/rp_lcmsrc.h),
+ * named here so that the configuration and the status channel know it. */
+typedef enum {
+    RP_HAL_SRC_V4L2 = 0,
+    RP_HAL_SRC_REPLAY,
+    RP_HAL_SRC_SIM,
+    RP_HAL_SRC_LCM
+} rp_hal_kind_t;
+
+/* rp_hal_cfg_t.realtime */
+enum {
+    RP_HAL_PACE_FAST = 0, /* replay / sim: sets as fast as they are asked for */
+    RP_HAL_PACE_SPACED,   /* at their recorded spacing, the first set at once */
+    RP_HAL_PACE_LIVE      /* replay: the recorded times are HAL clock times (rp_hal_now_us): each
+                           * set comes at its time, like a camera's frame; a set whose time
+                           * passed more than timeout_ms ago is skipped (a process started late
+                           * joins the others' present). sim: as SPACED */
+};
 
 /* What a source's sets carry. */
 typedef enum {
@@ -93,7 +111,7 @@ typedef struct {
     uint32_t sim_seed;                   /* sim: run seed (Table 1 protocol) */
     uint32_t sim_frames;                 /* sim: frames in the run (0 = the protocol's 100) */
     uint8_t sim_layout;                  /* sim: 0 = both stereo pairs (4 cams), 1 = four singles */
-    uint8_t realtime;                    /* replay / sim: pace sets at their timestamps */
+    uint8_t realtime;                    /* replay / sim: RP_HAL_PACE_* (0: fast) */
     uint8_t partial_sets;                /* replay: a row whose image cannot be read for some
                                           * cameras comes as a set with those cameras MISSING
                                           * (RP_HAL_OK, the reason in rp_hal_errmsg) - the

@@ -355,6 +355,39 @@ static void test_replay_named_columns(void **state)
     rp_hal_close(src);
 }
 
+/* realtime live: the recorded times are the HAL clock's. A row due more than timeout_ms ago
+ * is skipped (its image not even read: a missing file does not fail), a row due soon comes at
+ * its time, not before; seq counts the rows delivered. */
+static void test_replay_live(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    const int64_t now = rp_hal_now_us();
+    char csv[512];
+    snprintf(csv, sizeof csv, "utime_us,cam0\n%lld,gone.pgm\n%lld,x.pgm\n%lld,x.pgm\n",
+             (long long)(now - 500000), (long long)(now + 60000), (long long)(now + 100000));
+    write_file("frames.csv", csv);
+    rp_hal_cfg_t cfg = replay_cfg(1);
+    cfg.realtime = RP_HAL_PACE_LIVE;
+    cfg.timeout_ms = 200;
+    snprintf(cfg.replay_index, sizeof cfg.replay_index, "%s/frames.csv", g_dir);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    const int64_t t1 = rp_hal_now_us();
+    printf("live replay: the set due at +60 ms came at +%.1f ms\n", (double)(t1 - now) / 1000.0);
+    assert_true(set.utime == now + 60000 && set.seq == 0);
+    assert_true(t1 >= now + 60000 && t1 < now + 300000);
+    check_image(&set.cam[0], 0);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    assert_true(set.utime == now + 100000 && set.seq == 1);
+    assert_true(rp_hal_now_us() >= now + 100000);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    rp_hal_close(src);
+}
+
 /* With realtime, sets come at their recorded spacing (40 ms apart here). */
 static void test_replay_realtime(void **state)
 {
@@ -740,6 +773,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_replay_named_columns, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_index_file_by_name, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_realtime, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_live, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_lines_of_any_length, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_only_regular_files, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_pacing_saturates, setup_dir, remove_dir),

@@ -1,0 +1,35 @@
+/*
+ * rp_feats.h - what rigpose-frontend and the daemon's lcm source agree on: each camera's
+ * features channel, the cameras of the configured layout, a stereo camera's partner, and the
+ * checks of a rigpose.features_t that came over the network.
+ *
+ * The front ends and the estimator read the same configuration file (they differ only in
+ * source.kind): camera k's features travel on lcm.features_channel + "k" (decimal), e.g.
+ * RIGPOSE_FEATURES_CAM0.
+ */
+#ifndef RP_FEATS_H
+#define RP_FEATS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rigpose/rp_pipe.h"
+#include "rigpose_features_t.h"
+
+/* The channel of camera cam: prefix + decimal index into out (cap bytes). 0, or -1 if it does
+ * not fit. */
+int rp_feats_channel(const char *prefix, uint8_t cam, char *out, size_t cap);
+
+/* want[k] = 1 for each rig camera k (< n_cams) whose features the layout of cfg uses (its
+ * trackers: rp_pipe.h), else 0. Returns how many. */
+uint8_t rp_feats_layout_cams(const rp_pipe_cfg_t *cfg, uint8_t n_cams, uint8_t want[RP_MAX_CAMS]);
+
+/* The other camera of cam's stereo pair in cfg (stereo layouts), or -1. */
+int rp_feats_partner(const rp_pipe_cfg_t *cfg, uint8_t cam);
+
+/* 0 if m can go into a frame set of a rig of n_cams cameras as camera cam (the channel's): its
+ * cam is cam, 0 <= n <= RP_MAX_FEATS_PER_CAM, every used position finite; else -1 and why in
+ * why (a static string). */
+int rp_feats_check(const rigpose_features_t *m, uint8_t cam, uint8_t n_cams, const char **why);
+
+#endif /* RP_FEATS_H */

@@ -1,0 +1,224 @@
+/*
+ * test_lcmsrc.c - the daemon's source kind lcm (daemon/rp_lcmsrc.c) on memq://, fed
+ * rigpose.features_t as rigpose-frontend publishes them (rp_pub_fill_features / rp_pub_features):
+ *   - a set goes out once every camera of the layout is in it, with each camera's features
+ *     (ids and positions exactly), seq and state; a camera outside the layout is not waited for;
+ *   - a camera that sent a later frame is not waited for (MISSING, not GONE); a message older
+ *     than the last set out is late and dropped; one for the wrong camera or with a
+ *     non-finite position is refused;
+ *   - a camera silent for timeout_ms is GONE: the set waited at most timeout_ms, later sets do
+ *     not wait; when it sends again it is back in the next set;
+ *   - a restarted front end (a new instance) restarting its serials at 0: its ids continue
+ *     after the highest serial seen from that camera; the first front end's ids are unchanged;
+ *   - a timeout with nothing heard says so (RP_HAL_E_TIMEOUT, every camera MISSING).
+ */
+#include <lcm/lcm.h>
+#include <math.h>
+#include <string.h>
+
+#include "rigpose/rp_track.h"
+#include "rp_feats.h"
+#include "rp_lcmsrc.h"
+#include "rp_publish.h"
+#include "rp_test.h"
+
+#define TIMEOUT_MS 60
+
+static rp_config_t g_cfg;
+static rp_lsrc_t g_src;
+static rp_hal_set_t g_set;
+static rigpose_features_t g_m;
+static lcm_t *g_lcm;
+
+/* gc on cameras 0 and 1 of a rig of 3 (camera 2 outside the layout). */
+static int setup(void **state)
+{
+    (void)state;
+    memset(&g_cfg, 0, sizeof g_cfg);
+    g_cfg.rig.n_cams = 3;
+    g_cfg.pipe.layout = RP_PIPE_GC;
+    g_cfg.pipe.gc.n_cams = 2;
+    g_cfg.pipe.gc.cams[0] = 0;
+    g_cfg.pipe.gc.cams[1] = 1;
+    g_cfg.hal.sync_tol_us = 300;
+    g_cfg.hal.timeout_ms = TIMEOUT_MS;
+    snprintf(g_cfg.features_channel, sizeof g_cfg.features_channel, "FE");
+    g_lcm = lcm_create("memq://");
+    assert_non_null(g_lcm);
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    rp_lsrc_close(&g_src);
+    lcm_destroy(g_lcm);
+    return 0;
+}
+
+/* Camera cam's message at utime from front end `inst`: n features, ids rp_track_id(cam, s0 + i),
+ * positions (10 + i + 1/65536 * (i + 1), 20 + i). */
+static void send(uint8_t cam, int64_t utime, int32_t seq, uint16_t n, uint32_t s0,
+                 const char *inst)
+{
+    static rp_feat_t f[RP_MAX_FEATS_PER_CAM];
+    for (uint16_t i = 0; i < n; ++i) {
+        f[i].id = rp_track_id(cam, s0 + i);
+        f[i].uv[0] = (rp_real)(10 + i) + (rp_real)(i + 1) / (rp_real)65536;
+        f[i].uv[1] = (rp_real)(20 + i);
+    }
+    rp_pub_fill_features(&g_m, cam, utime, seq, f, n);
+    memcpy(g_m.instance, inst, strlen(inst));
+    char ch[RP_CFG_CHANNEL_MAX + 8];
+    assert_int_equal(rp_feats_channel(g_cfg.features_channel, cam, ch, sizeof ch), 0);
+    assert_int_equal(rp_pub_features(g_lcm, ch, &g_m), RP_PUB_OK);
+}
+
+static int64_t ms_since(int64_t t0) { return (rp_hal_now_us() - t0) / 1000; }
+
+static void test_a_set_of_every_camera_goes_out_at_once(void **state)
+{
+    (void)state;
+    send(0, 1000, 0, 5, 0, "A");
+    send(1, 1200, 0, 3, 0, "B"); /* within sync_tol_us, 300 us */
+    const int64_t t0 = rp_hal_now_us();
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(ms_since(t0) < TIMEOUT_MS / 2); /* camera 2 is not the layout's: not waited for */
+    assert_int_equal(g_set.payload, RP_HAL_PAYLOAD_FEATS);
+    assert_non_null(g_set.feats);
+    assert_true(g_set.utime == 1000);
+    assert_int_equal(g_set.n_cams, 3);
+    assert_int_equal(g_set.cam[0].flags, RP_HAL_CAM_OK);
+    assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_OK);
+    assert_int_equal(g_set.cam[2].flags & RP_HAL_CAM_MISSING, RP_HAL_CAM_MISSING);
+    assert_int_equal(g_set.feats->n[0], 5);
+    assert_int_equal(g_set.feats->n[1], 3);
+    assert_int_equal(g_set.feats->n[2], 0);
+    assert_int_equal(g_set.feats->f[0][4].id, rp_track_id(0, 4));
+    assert_true(g_set.feats->f[0][4].uv[0] == (rp_real)14 + (rp_real)5 / (rp_real)65536);
+    assert_true(g_set.feats->f[1][2].uv[1] == (rp_real)22);
+    assert_string_equal(rp_lsrc_errmsg(&g_src), "");
+}
+
+static void test_moved_past_late_and_bad_messages(void **state)
+{
+    (void)state;
+    send(0, 1000, 0, 2, 0, "A");
+    send(1, 1000, 0, 2, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    send(0, 2000, 1, 2, 0, "A");
+    send(1, 3000, 1, 2, 0, "B"); /* camera 1 skipped the frame of 2000 */
+    send(0, 3000, 2, 2, 0, "A");
+    const int64_t t0 = rp_hal_now_us();
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(ms_since(t0) < TIMEOUT_MS / 2);
+    assert_true(g_set.utime == 2000);
+    assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_MISSING); /* not GONE: it is sending */
+    assert_int_equal(g_set.feats->n[1], 0);
+    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "camera 1: no features in this set"));
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 3000);
+    assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_OK);
+
+    send(0, 2500, 3, 2, 0, "A"); /* older than the last set out */
+    send(1, 4000, 2, 2, 0, "B");
+    /* camera 0's frame on camera 1's channel, and a non-finite position */
+    rp_pub_fill_features(&g_m, 0, 4000, 3, NULL, 0);
+    assert_int_equal(rp_pub_features(g_lcm, "FE1", &g_m), RP_PUB_OK);
+    rp_pub_fill_features(&g_m, 0, 4000, 3, NULL, 0);
+    g_m.n = 1;
+    g_m.u[0] = NAN;
+    assert_int_equal(rp_pub_features(g_lcm, "FE0", &g_m), RP_PUB_OK);
+    send(0, 4000, 4, 2, 0, "A");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 4000);
+    assert_int_equal(g_set.cam[0].flags, RP_HAL_CAM_OK);
+    assert_int_equal(g_set.feats->n[0], 2);
+    assert_int_equal(g_src.n_late, 1);
+    assert_int_equal(g_src.n_bad, 2);
+}
+
+static void test_a_silent_camera_is_gone_then_rejoins(void **state)
+{
+    (void)state;
+    send(0, 1000, 0, 4, 0, "A");
+    send(1, 1000, 0, 4, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    /* camera 1's front end dies: the next set waits timeout_ms for it, then goes without */
+    send(0, 2000, 1, 4, 0, "A");
+    int64_t t0 = rp_hal_now_us();
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    const int64_t waited = ms_since(t0);
+    assert_true(waited >= TIMEOUT_MS / 2 && waited < 3 * TIMEOUT_MS);
+    assert_true(g_set.utime == 2000);
+    assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE);
+    /* gone: the next sets do not wait */
+    send(0, 3000, 2, 4, 0, "A");
+    t0 = rp_hal_now_us();
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(ms_since(t0) < TIMEOUT_MS / 2);
+    assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE);
+    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "silent for longer than timeout_ms"));
+    /* restarted (instance C), its serials from 0 again: back in the next set, its ids moved
+     * past the 4 serials (0..3) the first front end used */
+    send(1, 4000, 0, 3, 0, "C");
+    send(0, 4000, 3, 4, 4, "A");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 4000);
+    assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_OK);
+    assert_int_equal(g_set.feats->n[1], 3);
+    for (uint16_t i = 0; i < 3; ++i) {
+        assert_int_equal(rp_track_id_cam(g_set.feats->f[1][i].id), 1);
+        assert_int_equal(rp_track_id_serial(g_set.feats->f[1][i].id), 4 + i);
+    }
+    assert_int_equal(g_set.feats->f[0][0].id, rp_track_id(0, 4)); /* camera 0: its own ids */
+    assert_int_equal(g_src.n_restarts, 1);
+}
+
+static void test_a_timeout_with_nothing_heard(void **state)
+{
+    (void)state;
+    const int64_t t0 = rp_hal_now_us();
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_E_TIMEOUT);
+    assert_true(ms_since(t0) >= TIMEOUT_MS - 2);
+    assert_null(g_set.feats);
+    assert_int_equal(g_set.cam[0].flags, RP_HAL_CAM_MISSING); /* never heard: not yet GONE */
+    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "no frame set from the front ends"));
+    assert_int_equal(rp_lsrc_grab(NULL, &g_set), RP_HAL_E_ARG);
+}
+
+static void test_layout_cameras_and_partners(void **state)
+{
+    (void)state;
+    rp_pipe_cfg_t pc;
+    uint8_t want[RP_MAX_CAMS];
+    assert_int_equal(rp_pipe_default_cfg(RP_PIPE_STEREO4, &pc), RP_OK);
+    assert_int_equal(rp_feats_layout_cams(&pc, 6, want), 4); /* pairs (0,4), (2,5) */
+    assert_true(want[0] && want[4] && want[2] && want[5] && !want[1] && !want[3]);
+    assert_int_equal(rp_feats_partner(&pc, 4), 0);
+    assert_int_equal(rp_feats_partner(&pc, 2), 5);
+    assert_int_equal(rp_feats_partner(&pc, 1), -1);
+    assert_int_equal(rp_pipe_default_cfg(RP_PIPE_CAM3, &pc), RP_OK);
+    assert_int_equal(rp_feats_layout_cams(&pc, 6, want), 1);
+    assert_true(want[2]);
+    assert_int_equal(rp_feats_partner(&pc, 2), -1);
+    char ch[8];
+    assert_int_equal(rp_feats_channel("FE_CAMX", 3, ch, sizeof ch), -1); /* 8 + NUL > 8 */
+    assert_int_equal(rp_feats_channel("FE_CA", 3, ch, sizeof ch), 0);
+    assert_string_equal(ch, "FE_CA3");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_a_set_of_every_camera_goes_out_at_once, setup,
+                                        teardown),
+        cmocka_unit_test_setup_teardown(test_moved_past_late_and_bad_messages, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_a_silent_camera_is_gone_then_rejoins, setup,
+                                        teardown),
+        cmocka_unit_test_setup_teardown(test_a_timeout_with_nothing_heard, setup, teardown),
+        cmocka_unit_test(test_layout_cameras_and_partners),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
