@@ -22,11 +22,10 @@
  * capture time + (CLOCK_REALTIME - CLOCK_MONOTONIC) read at that moment, the wall clock that
  * PTP or chrony keeps common to the boards of a robot (daemon/README.md, "Five boards").
  *
- * How: rp_pipe.h has no entry that runs the trackers and the matcher alone yet. Single cameras
- * (gc, rc, cam1..cam4) get an rp_tracker_t each, set up and fed as rp_pipe.c's track_one does
- * (the few lines of it are repeated in track_single below); stereo layouts an rp_pipe_t of
- * FILE's layout fed the images of LIST only, whose estimator then also runs, on this front
- * end's cameras, and is dropped. Both go once rp_pipe.h splits its step into phases.
+ * How: an rp_pipe_t of FILE's layout runs the front-end phases of its step (rp_pipe.h:
+ * rp_pipe_begin, rp_pipe_track for the trackers of LIST's cameras only, rp_pipe_match for the
+ * pairs LIST holds) and never its estimator: the same trackers and matcher, set up and fed the
+ * same way, as the daemon's in-process pipeline.
  *
  * Exit codes as the daemon's (daemon/README.md): 0 done (the source ended, --frames reached,
  * SIGINT / SIGTERM / SIGHUP), 1 usage, 2 configuration, 3 LCM, 4 source open / start, 5 the
@@ -63,11 +62,7 @@ enum {
 
 static volatile sig_atomic_t g_stop;
 static rp_config_t g_cfg;
-static rp_pipe_t g_pipe;   /* stereo layouts: the pipeline, fed this front end's images */
-static rp_tracker_t g_trk[RP_MAX_CAMS]; /* single-camera layouts: own camera i's tracker */
-static rp_frameset_t g_fs; /* single-camera layouts: the features of the last images */
-static int g_stereo;
-static int g_tracked_any;  /* single-camera layouts: a set was tracked (g_fs.utime is its) */
+static rp_pipe_t g_pipe;   /* the pipeline: its front end, fed this front end's images */
 static rp_hal_set_t g_set;
 static rigpose_features_t g_msg;
 static int8_t g_instance[32];
@@ -212,55 +207,39 @@ static void set_flags(uint8_t own, const rp_frameset_t *fs, rigpose_features_t *
 
 /* ---- tracking -------------------------------------------------------------------------------- */
 
-/* Single-camera layouts: own camera i's tracker as rp_pipe.c's add_tracker sets it up. */
-static rp_status_t init_single(uint8_t i)
+/* Does this front end own rig camera cam? */
+static int owns(uint8_t cam)
 {
-    rp_track_cfg_t tc = g_cfg.pipe.track;
-    tc.cam = g_cam[i];
-    return rp_track_init(&g_trk[i], &tc);
+    for (uint8_t i = 0; i < g_n_own; ++i) {
+        if (g_cam[i] == cam) {
+            return 1;
+        }
+    }
+    return 0;
 }
 
-/* Own camera i's image (NULL: none) into g_fs as rp_pipe.c's track_one does for a camera that
- * is not the second of a pair: no features without an image, with one of another size than the
- * calibration, or when the tracker fails (a blank image: RP_E_DEGENERATE). */
-static void track_single(uint8_t i, const rp_image_t *img, int64_t utime)
-{
-    const uint8_t cam = g_cam[i];
-    const rp_camera_t *c = &g_cfg.rig.cam[cam].cam;
-    g_fs.n[cam] = 0;
-    if (img == NULL || img->data == NULL || img->w != c->width || img->h != c->height) {
-        return;
-    }
-    uint16_t n = 0;
-    rp_track_info_t info;
-    const rp_status_t st = rp_track_process(&g_trk[i], img, utime, g_fs.f[cam],
-                                            RP_MAX_FEATS_PER_CAM, &n, &info);
-    if (st == RP_OK || st == RP_E_TOO_FEW || st == RP_E_FULL) {
-        g_fs.n[cam] = n;
-    }
-}
-
-/* This front end's images of one set through its trackers (and matcher): *fs their features.
- * RP_OK, or RP_E_RANGE when utime is not after the last set's (nothing tracked). */
+/* This front end's images of one set through the pipeline's front end: the trackers of its
+ * cameras, then the matching of its pairs (a pair of other cameras has no image and is not
+ * matched); *fs their features. RP_OK, or RP_E_RANGE when utime is not after the last set's
+ * (nothing tracked). */
 static rp_status_t track(const rp_image_t *const img[RP_MAX_CAMS], int64_t utime,
                          const rp_frameset_t **fs)
 {
-    if (g_stereo) {
-        rp_estimate_t est; /* the pipeline's estimate: not this process's business */
-        const rp_status_t st = rp_pipe_step(&g_pipe, img, g_cfg.rig.n_cams, utime, &est);
-        /* ignored: cannot fail: the pipeline was set up */
-        (void)rp_pipe_frameset(&g_pipe, fs);
-        return st == RP_E_RANGE || st == RP_E_ARG ? RP_E_RANGE : RP_OK;
-    }
-    if (g_tracked_any && utime <= g_fs.utime) { /* as rp_pipe_step: time goes forward */
+    if (rp_pipe_begin(&g_pipe, utime, NULL) != RP_OK) {
         return RP_E_RANGE;
     }
-    g_tracked_any = 1;
-    g_fs.utime = utime;
-    for (uint8_t i = 0; i < g_n_own; ++i) {
-        track_single(i, img[g_cam[i]], utime);
+    for (uint8_t t = 0; t < rp_pipe_n_trackers(&g_pipe); ++t) {
+        uint8_t cam = 0;
+        if (rp_pipe_tracker_cam(&g_pipe, t, &cam) == RP_OK && owns(cam)) {
+            /* ignored: cannot fail: the step is begun, t is a tracker; the tracker's outcome
+             * is in the pipeline's report */
+            (void)rp_pipe_track(&g_pipe, t, img, g_cfg.rig.n_cams);
+        }
     }
-    *fs = &g_fs;
+    /* ignored: cannot fail: the step is begun */
+    (void)rp_pipe_match(&g_pipe);
+    /* ignored: cannot fail: the pipeline was set up */
+    (void)rp_pipe_frameset(&g_pipe, fs);
     return RP_OK;
 }
 
@@ -446,15 +425,6 @@ int main(int argc, char **argv)
     if (parse_cameras(cameras) != 0) {
         usage(stderr);
         return EXIT_USAGE;
-    }
-    g_stereo = g_cfg.pipe.layout == RP_PIPE_STEREO4 || g_cfg.pipe.layout == RP_PIPE_STEREO2;
-    for (uint8_t i = 0; i < g_n_own && !g_stereo; ++i) {
-        const rp_status_t tst = init_single(i);
-        if (tst != RP_OK) {
-            fprintf(stderr, "rigpose-frontend: %s: camera %u: the tracker refused the "
-                    "configuration: %s\n", config, g_cam[i], rp_status_str(tst));
-            return EXIT_PIPE;
-        }
     }
     for (uint8_t i = 0; i < g_n_own; ++i) {
         /* ignored: cannot fail: rp_config keeps the prefix 2 characters short of the field */
