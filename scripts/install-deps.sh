@@ -18,7 +18,7 @@ want=${1:-all}
 
 host_pkgs=(build-essential g++ make pkg-config
            libeigen3-dev libcmocka-dev liblcm-dev liblcm-bin
-           libopencv-dev libopengv-dev libyaml-dev valgrind
+           libopencv-dev libopengv-dev libceres-dev libyaml-dev valgrind
            python3 python3-venv opencv-doc
            qemu-system-x86 busybox-static xz-utils cpio libpng-dev libjpeg-dev
            liblcm-java libjchart2d-java default-jdk-headless default-jre xvfb imagemagick

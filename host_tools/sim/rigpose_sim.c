@@ -95,25 +95,14 @@ typedef struct {
     rp_status_t (*step)(void *state, const rp_frameset_t *fs, rp_estimate_t *est);
 } method_t;
 
-/* The stereo EKF's plant noise for the feature-level protocol (m^2/s^3, rad^2/s^3): the
- * Table 1 figures of this tool are measured with it. The core's default, 3, is chosen on
- * rendered images (config/README.md, "Defaults that are measured"). */
-#define SIM_STEREO_Q 1.0
-
+/* stereo4 / stereo2 as rp_sim_stereo_cfg says (plant noise RP_SIM_STEREO_Q), with the
+ * ablation options on top. */
 static rp_vo_stereo_cfg_t stereo_cfg(const method_opts_t *o, int both_pairs)
 {
-    rp_vo_stereo_cfg_t cfg = rp_vo_stereo_default_cfg();
-    cfg.n_pairs = both_pairs ? 2 : 1;
-    cfg.pair_a[0] = RP_SIM_CAM1;
-    cfg.pair_b[0] = RP_SIM_CAM1B;
-    if (both_pairs) {
-        cfg.pair_a[1] = RP_SIM_CAM3;
-        cfg.pair_b[1] = RP_SIM_CAM3B;
-    }
-    cfg.ekf.q_trans = (rp_real)SIM_STEREO_Q;
-    cfg.ekf.q_rot = (rp_real)SIM_STEREO_Q;
-    /* The filter needs sigma > 0: a noise-free simulation still gets a small one. */
-    cfg.ekf.sigma_px = (rp_real)(o->noise_px > 0.01 ? o->noise_px : 0.01);
+    rp_sim_cfg_t sim;
+    rp_sim_default_cfg(&sim);
+    sim.noise_px = o->noise_px;
+    rp_vo_stereo_cfg_t cfg = rp_sim_stereo_cfg(&sim, both_pairs);
     if (o->ekf_iterations) {
         cfg.ekf.iterations = (uint8_t)o->ekf_iterations;
     }

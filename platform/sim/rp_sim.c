@@ -163,6 +163,22 @@ rp_vo_gc_cfg_t rp_sim_gc_cfg(const rp_sim_cfg_t *cfg)
     return c;
 }
 
+rp_vo_stereo_cfg_t rp_sim_stereo_cfg(const rp_sim_cfg_t *cfg, int both_pairs)
+{
+    rp_vo_stereo_cfg_t c = rp_vo_stereo_default_cfg();
+    c.n_pairs = both_pairs ? 2 : 1;
+    c.pair_a[0] = RP_SIM_CAM1;
+    c.pair_b[0] = RP_SIM_CAM1B;
+    if (both_pairs) {
+        c.pair_a[1] = RP_SIM_CAM3;
+        c.pair_b[1] = RP_SIM_CAM3B;
+    }
+    c.ekf.q_trans = (rp_real)RP_SIM_STEREO_Q;
+    c.ekf.q_rot = (rp_real)RP_SIM_STEREO_Q;
+    c.ekf.sigma_px = (rp_real)(cfg->noise_px > 0.01 ? cfg->noise_px : 0.01);
+    return c;
+}
+
 rp_sim_place_t rp_sim_paper_place(int right)
 {
     const double s = 0.05 * sqrt(3.0);

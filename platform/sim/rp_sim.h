@@ -32,6 +32,7 @@ extern "C" {
 #include "rigpose/rp_frame.h"
 #include "rigpose/rp_rig.h"
 #include "rigpose/rp_vo_gc.h"
+#include "rigpose/rp_vo_stereo.h"
 
 enum { RP_SIM_CAM1 = 0, RP_SIM_CAM2, RP_SIM_CAM3, RP_SIM_CAM4, RP_SIM_CAM1B, RP_SIM_CAM3B,
        RP_SIM_NCAMS };
@@ -99,6 +100,16 @@ void rp_sim_make_rig(const rp_sim_cfg_t *cfg, rp_rig_t *rig);
  * the shell's mid radius (r_in + r_out) / 2 along their rays, +- 0.15 m; the filter's pixel
  * sigma is cfg's noise (at least 0.01 px: the filter needs sigma > 0). */
 rp_vo_gc_cfg_t rp_sim_gc_cfg(const rp_sim_cfg_t *cfg);
+
+/* The stereo estimator's plant noise for the feature-level protocol (m^2/s^3, rad^2/s^3): the
+ * Table 1 figures of rigpose-sim are measured with it. The core's default (3) is chosen on
+ * rendered images (config/README.md, "Defaults that are measured"). */
+#define RP_SIM_STEREO_Q 1.0
+
+/* stereo4 (both_pairs 1: cam1/cam1b and cam3/cam3b) or stereo2 (0: the front pair) as the
+ * simulator and rigpose-ba run them: the core's defaults with plant noise RP_SIM_STEREO_Q and the
+ * filter's pixel sigma cfg's noise (at least 0.01 px). */
+rp_vo_stereo_cfg_t rp_sim_stereo_cfg(const rp_sim_cfg_t *cfg, int both_pairs);
 
 /* The paper's placement of cam2 (right = 1) or cam4 (right = 0); 0.0866 is exactly
  * 0.1 cos(30 deg), so every camera is 0.1 m from cam1. */

@@ -248,7 +248,7 @@ static rp_status_t stereo4_init(void *vo, const rp_rig_t *rig)
     c.pair_b[0] = RP_SIM_CAM1B;
     c.pair_a[1] = RP_SIM_CAM3;
     c.pair_b[1] = RP_SIM_CAM3B;
-    c.ekf.q_trans = c.ekf.q_rot = (rp_real)1.0; /* as rigpose-sim (its SIM_STEREO_Q) */
+    c.ekf.q_trans = c.ekf.q_rot = (rp_real)1.0; /* as rigpose-sim (RP_SIM_STEREO_Q) */
     c.ekf.sigma_px = (rp_real)0.5;
     return rp_vo_stereo_init(vo, rig, &c);
 }
@@ -259,7 +259,7 @@ static rp_status_t stereo2_init(void *vo, const rp_rig_t *rig)
     c.n_pairs = 1;
     c.pair_a[0] = RP_SIM_CAM1;
     c.pair_b[0] = RP_SIM_CAM1B;
-    c.ekf.q_trans = c.ekf.q_rot = (rp_real)1.0; /* as rigpose-sim (its SIM_STEREO_Q) */
+    c.ekf.q_trans = c.ekf.q_rot = (rp_real)1.0; /* as rigpose-sim (RP_SIM_STEREO_Q) */
     c.ekf.sigma_px = (rp_real)0.5;
     return rp_vo_stereo_init(vo, rig, &c);
 }

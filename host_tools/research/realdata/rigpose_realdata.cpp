@@ -14,7 +14,8 @@
  * The only per-dataset inputs are the calibration and the frame times.
  *
  * usage: rigpose-realdata (--kitti DIR | --euroc DIR) [--config FILE] [--frames N] [--first K]
- *            [--name NAME] [--quiet] [--json-out FILE] [--check-ate-m X] [--check-ate-percent X]
+ *            [--name NAME] [--quiet] [--json-out FILE] [--tracks-out FILE] [--check-ate-m X]
+ *            [--check-ate-percent X]
  *            [--replay-out DIR [--copy-images]] [--no-run] [settings, see --help]
  * Exit status: 0 done (and checks passed), 1 a check failed or the run broke, 2 bad usage/data.
  */
@@ -42,6 +43,7 @@
 #include "rp_realdata.hpp"
 #include "../../common/rp_cfg_diff.h"
 #include "../../common/rp_cv.hpp"
+#include "../../ba/rp_tracks.hpp"
 
 namespace fs = std::filesystem;
 
@@ -433,6 +435,9 @@ void usage(FILE *f)
         "  --name NAME          prefix of the JSON figures (default kitti00 / euroc_mh01)\n"
         "  --quiet              no per-frame lines\n"
         "  --json-out FILE      write the figures as one flat JSON object\n"
+        "  --tracks-out FILE    write the rig and, per frame set, the features the estimator\n"
+        "                       received (rp_pipe_frameset), its pose and the truth\n"
+        "                       (host_tools/ba/rp_tracks.hpp; rigpose-ba --tracks reads it)\n"
         "  --check-ate-m X      exit 1 unless the ATE is at most X metres\n"
         "  --check-ate-percent X  exit 1 unless the ATE is at most X %% of the path\n"
         "  --replay-out DIR     write a replay folder (frames.csv, truth.csv, rig.yaml); image\n"
@@ -472,7 +477,7 @@ void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
-    std::string kitti, euroc, name, json_out, replay_out, config, mirror_out;
+    std::string kitti, euroc, name, json_out, replay_out, config, mirror_out, tracks_out;
     bool mirror = false;
     size_t frames = 0, first = 0;
     rprd::LoadOpts lo;
@@ -541,6 +546,8 @@ int main(int argc, char **argv)
             name = argv[++i];
         } else if (a == "--json-out") {
             json_out = argv[++i];
+        } else if (a == "--tracks-out") {
+            tracks_out = argv[++i];
         } else if (a == "--replay-out") {
             replay_out = argv[++i];
         } else if (a == "--direct-rows") {
@@ -690,6 +697,15 @@ int main(int argc, char **argv)
     }
     std::vector<rprd::Pose> est_pose;
     double step_s = 0.0;
+    std::FILE *tracks = nullptr;
+    if (!tracks_out.empty()) {
+        tracks = std::fopen(tracks_out.c_str(), "w");
+        if (!tracks || !rptk::write_header(tracks, seq.name, seq.rig, &err)) {
+            std::fprintf(stderr, "rigpose-realdata: %s: cannot write %s\n", tracks_out.c_str(),
+                         err.c_str());
+            return 1;
+        }
+    }
     size_t lost = 0, reinit = 0;
     for (size_t j = 0; j < seq.utime.size(); ++j) {
         cv::Mat im[2];
@@ -719,6 +735,16 @@ int main(int argc, char **argv)
         reinit += (est.flags & RP_EST_REINIT) ? 1u : 0u;
         const rprd::FrameErr e = rprd::frame_error(p, seq.truth[j]);
         est_pose.push_back(rprd::pose_from_vec(p));
+        if (tracks) {
+            const rp_frameset_t *fs = nullptr;
+            double tv[6];
+            rprd::pose_to_vec(seq.truth[j], tv);
+            if (rp_pipe_frameset(&pipe, &fs) != RP_OK ||
+                !rptk::write_frame(tracks, (uint32_t)j, *fs, est, tv, &err)) {
+                std::fprintf(stderr, "rigpose-realdata: %s: %s\n", tracks_out.c_str(), err.c_str());
+                return 1;
+            }
+        }
         if (!quiet) {
             std::printf("%5zu %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %8.4f %7.3f %4u %4u %4u %s%s%s\n",
                         j, p[0], p[1], p[2], seq.truth[j].t[0], seq.truth[j].t[1],
@@ -727,6 +753,10 @@ int main(int argc, char **argv)
                         (unsigned)est.n_landmarks, flag_text(est.flags).c_str(),
                         st == RP_OK ? "" : " ", st == RP_OK ? "" : rp_status_str(st));
         }
+    }
+    if (tracks && std::fclose(tracks) != 0) {
+        std::fprintf(stderr, "rigpose-realdata: %s: write failed\n", tracks_out.c_str());
+        return 1;
     }
     const rprd::Summary s = rprd::summarise(est_pose, seq.truth);
     const double ms = 1e3 * step_s / (double)s.frames;
