@@ -486,6 +486,54 @@ static void test_phased_step_is_the_step(void **state)
     assert_status(rp_pipe_tracker_cam(&pipe2, 0, NULL), RP_E_ARG);
 }
 
+/* Given trackers that would top up at every frame set (threshold = target), then in gc (4
+ * detecting trackers) and stereo4 (2: the pairs' first cameras) only the tracker whose turn it
+ * is tops up: the d-th detecting one on frame sets d modulo their count (rp_pipe.h); every
+ * tracker detects at the first frame set. */
+static void test_topups_take_turns(void **state)
+{
+    (void)state;
+    static const rp_pipe_layout_t layouts[2] = {RP_PIPE_GC, RP_PIPE_STEREO4};
+    static const uint8_t det_cams[2][4] = {{0, 1, 2, 3}, {0, 2, 0, 0}};
+    static const uint8_t n_det[2] = {4, 2};
+    for (int li = 0; li < 2; ++li) {
+        rp_pipe_cfg_t cfg;
+        assert_ok(rp_pipe_default_cfg(layouts[li], &cfg));
+        cfg.gc.init_depth_m = RP_C(1.2);
+        cfg.gc.init_on_sphere = 1;
+        cfg.track.topup_below = cfg.track.target;
+        assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+        int n_topped = 0;
+        for (int j = 0; j < NFRAMES; ++j) {
+            rp_image_t im[NCAM];
+            const rp_image_t *ptr[NCAM];
+            for (int k = 0; k < NCAM; ++k) {
+                im[k] = fx_image(frames[j][k], W, H);
+                ptr[k] = &im[k];
+            }
+            rp_estimate_t est;
+            const rp_status_t st = rp_pipe_step(&pipe, ptr, NCAM, (int64_t)j * DT_US, &est);
+            assert_true(st == RP_OK || st == RP_E_TOO_FEW);
+            const rp_pipe_info_t *info;
+            assert_ok(rp_pipe_info(&pipe, &info));
+            for (uint8_t d = 0; d < n_det[li]; ++d) {
+                const rp_track_info_t *ti = &info->track[det_cams[li][d]];
+                const int topped = (ti->flags & RP_TRACK_TOPPED_UP) != 0;
+                if (j == 0) {
+                    assert_true(topped);
+                } else if (info->frame % n_det[li] != d) {
+                    assert_false(topped);
+                } else {
+                    n_topped += topped;
+                }
+            }
+        }
+        print_message("%s: %d top-ups on the trackers' turns in %d frame sets\n",
+                      rp_pipe_layout_name(layouts[li]), n_topped, NFRAMES - 1);
+        assert_true(n_topped >= (NFRAMES - 1) / 2);
+    }
+}
+
 /* Feature-level input: rp_pipe_step_feats gives exactly what the layout's estimator gives on
  * the same frame sets (stereo4 against rp_vo_stereo, gc against rp_vo_gc, 12 frame sets of
  * run 0 of the simulation seeded 3), keeps the frame set and reports the cameras; a repeated
@@ -562,6 +610,7 @@ int main(void)
         cmocka_unit_test(test_bad_images_give_states),
         cmocka_unit_test(test_bad_calls),
         cmocka_unit_test(test_phased_step_is_the_step),
+        cmocka_unit_test(test_topups_take_turns),
         cmocka_unit_test(test_step_feats_is_the_layouts_estimator),
     };
     return cmocka_run_group_tests(tests, setup_frames, NULL);

@@ -18,11 +18,13 @@
 #define rp_track_init rp_track_init_scalar
 #define rp_track_process rp_track_process_scalar
 #define rp_pyr_build rp_pyr_build_scalar
+#define rp_track_set_topup_turn rp_track_set_topup_turn_scalar
 #include "../../core/src/frontend/rp_track.c"
 #undef rp_track_default_cfg
 #undef rp_track_init
 #undef rp_track_process
 #undef rp_pyr_build
+#undef rp_track_set_topup_turn
 rp_status_t rp_track_default_cfg_scalar(rp_track_cfg_t *cfg);
 rp_status_t rp_track_init_scalar(rp_tracker_t *trk, const rp_track_cfg_t *cfg);
 rp_status_t rp_track_process_scalar(rp_tracker_t *trk, const rp_image_t *img, int64_t utime,
@@ -538,6 +540,39 @@ static void test_topup_refills_emptied_cells(void **s)
     assert_true(new_total > 0 && new_right >= new_total / 2);
 }
 
+/* Given the same shift and a tracker that would top up, then without its turn
+ * (rp_track_set_topup_turn 0) it only tracks, and with the turn back it tops up; the first
+ * image detects whatever the turn (no track to follow). */
+static void test_topup_waits_for_its_turn(void **s)
+{
+    (void)s;
+    texture_t t;
+    texture_make(&t);
+    render(&t, 0, 0, img0);
+    render(&t, -12, 0, img1);
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    cfg.topup_below = cfg.target;
+    assert_ok(rp_track_init(&trk, &cfg));
+    assert_status(rp_track_set_topup_turn(NULL, 1), RP_E_ARG);
+    assert_ok(rp_track_set_topup_turn(&trk, 0));
+    uint16_t n0 = 0, n1 = 0, n2 = 0;
+    rp_track_info_t info;
+    rp_image_t a = view(img0, W, H), b = view(img1, W, H);
+    assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, &info));
+    assert_true(info.flags & RP_TRACK_TOPPED_UP);
+    assert_true(n0 >= 140);
+    assert_ok(rp_track_process(&trk, &b, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, &info));
+    assert_false(info.flags & RP_TRACK_TOPPED_UP);
+    assert_int_equal(info.n_new, 0);
+    assert_int_equal(n1, info.n_tracked);
+    assert_true(n1 < n0);
+    assert_ok(rp_track_set_topup_turn(&trk, 1));
+    assert_ok(rp_track_process(&trk, &a, 2, f1, RP_MAX_FEATS_PER_CAM, &n2, &info));
+    assert_true(info.flags & RP_TRACK_TOPPED_UP);
+    assert_true(n2 > info.n_tracked);
+}
+
 /* Given a textured scene moving (sub-pixel shifts, up to 9 px a frame, a blank frame, a jump that
  * loses tracks at the border), then the library's tracker (vector kernels where the compiler has
  * them) and the plain-C build give bit-identical pyramids, features, positions and events. */
@@ -755,6 +790,7 @@ int main(void)
         cmocka_unit_test(test_window_sizes),
         cmocka_unit_test(test_tiny_image),
         cmocka_unit_test(test_topup_refills_emptied_cells),
+        cmocka_unit_test(test_topup_waits_for_its_turn),
         cmocka_unit_test(test_weights_every_subpixel_pair),
         cmocka_unit_test(test_state_size),
         cmocka_unit_test(test_vector_equals_scalar),

@@ -26,6 +26,14 @@
  * these whenever it (re-)initialises (its backtracking uses the previous frame set, which
  * carries them too). Matching costs only at births, not every frame.
  *
+ * Top-ups take turns. Of the trackers that detect (all but the pairs' second cameras), one per
+ * frame set may top up: the d-th of n_det on the frame sets whose number (rp_pipe_info_t.frame)
+ * is d modulo n_det, fixed at rp_pipe_begin, so the turns do not depend on how the trackers are
+ * scheduled. A tracker under its threshold waits at most n_det - 1 frame sets (n_det more for
+ * each of its turns without an image); one with no track left (the first frame set, every
+ * track lost) detects at once. Detection and the matching of the new features are the frame
+ * set's rare, large costs: taking turns keeps them from landing on the same frame set.
+ *
  * Memory: rp_pipe_t holds RP_PIPE_MAX_TRACKERS trackers (each two pyramids and a response map
  * at the tracker's size limits: sizeof(rp_tracker_t) is 0.90 MB at the default 640x480), each
  * stereo pair's matcher and scratch, and the estimator: 6.3 MB in all with double rp_real,

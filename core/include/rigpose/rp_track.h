@@ -145,6 +145,7 @@ typedef struct {
     uint32_t next_k;  /* serial of the next new track (id rp_track_id(cfg.cam, next_k)); counts
                        * modulo 2^28 (RP_TRACK_SERIAL_MASK) */
     uint16_t n;       /* current tracks */
+    uint8_t topup_turn; /* 1: the next rp_track_process may top up (rp_track_set_topup_turn) */
     uint32_t id[RP_MAX_FEATS_PER_CAM];
     int32_t pos_q16[RP_MAX_FEATS_PER_CAM][2]; /* level-0 position, Q16 px */
     /* scratch of detection: rows stream through small rings, no full-frame response map */
@@ -168,10 +169,11 @@ rp_status_t rp_track_default_cfg(rp_track_cfg_t *cfg);
 rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg);
 
 /* Tracks the features of the previous image into img, drops the bad ones (forward-backward,
- * texture, left the image), tops up to cfg.target when fewer than cfg.topup_below remain
- * (searching first the bucketing cells that hold fewer than ceil(target / cells) features, then,
- * if the count is still under topup_below, the other cells under their cap), and writes at most
- * cap features to out (*n_out of them). info (may be NULL) receives the events.
+ * texture, left the image), tops up to cfg.target when fewer than cfg.topup_below remain and it
+ * is the tracker's turn (rp_track_set_topup_turn; always when no track remains), searching
+ * first the bucketing cells that hold fewer than ceil(target / cells) features, then, if the
+ * count is still under topup_below, the other cells under their cap, and writes at most cap
+ * features to out (*n_out of them). info (may be NULL) receives the events.
  * Returns:
  *   RP_OK         features in out (on RP_TRACK_ALL_LOST they are all new, re-detected)
  *   RP_E_ARG      NULL pointer; image larger than RP_TRACK_MAX_W x H or smaller than the window
@@ -206,6 +208,13 @@ rp_status_t rp_track_adopt(rp_tracker_t *trk, const rp_feat_t *f);
  * *n their number. RP_E_FULL (more than cap: the first cap written), RP_E_ARG (NULL). */
 rp_status_t rp_track_features(const rp_tracker_t *trk, rp_feat_t *out, uint16_t cap,
                               uint16_t *n);
+
+/* Whether the next rp_track_process may top up (turn 1, as after rp_track_init) or not (0:
+ * it only tracks, unless no track remains, when it detects anew whatever the turn). A caller that
+ * runs several trackers in one frame set gives the turn to one at a time (rp_pipe.h), so that
+ * at most one camera pays for detection (and its new features' matching) per frame set.
+ * RP_E_ARG (NULL). */
+rp_status_t rp_track_set_topup_turn(rp_tracker_t *trk, uint8_t turn);
 
 /* *k: the serial of the next new track (its id is rp_track_id(cfg.cam, *k)), so a track whose
  * rp_track_serial_since(rp_track_id_serial(id), *k) was born after this call. RP_E_ARG (NULL). */

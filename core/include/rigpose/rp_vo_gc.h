@@ -55,7 +55,9 @@
  *     features start at init_depth_m * mu. Every ba_stride frames the updated pose and the
  *     pixels of ba_per_cam landmarks per camera become a keyframe; every ba_every keyframes
  *     (once RP_VO_GC_BA_MIN_KF are held) a window bundle adjustment in metres over the last
- *     ba_kf keyframes (rp_gcba.h) says which mu the window implies, and a scalar filter on
+ *     ba_kf keyframes (rp_gcba.h; run in pieces, one per frame set, the piece of a frame set
+ *     that re-found its pose in step 2 waiting for the next one, so that the two largest
+ *     costs of the estimator do not add up) says which mu the window implies, and a scalar filter on
  *     mu (prior 1 +- mscale_sigma) takes it with its variance times ba_var_scale. Refused (counted in
  *     n_ba_rejected): a failed adjustment, one whose RMS residual stays over
  *     RP_VO_GC_BA_MAX_RMS ba.sigma_px, one more than RP_VO_GC_BA_GATE_SIGMA sigma from the

@@ -198,6 +198,16 @@ rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg)
     trk->utime = 0;
     trk->next_k = 0;
     trk->n = 0;
+    trk->topup_turn = 1;
+    return RP_OK;
+}
+
+rp_status_t rp_track_set_topup_turn(rp_tracker_t *trk, uint8_t turn)
+{
+    if (trk == NULL) {
+        return RP_E_ARG;
+    }
+    trk->topup_turn = turn != 0;
     return RP_OK;
 }
 
@@ -1074,7 +1084,7 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
     trk->cur = nxt;
     trk->has_prev = 1;
     trk->utime = utime;
-    if (trk->n < trk->cfg.topup_below || trk->n == 0) {
+    if ((trk->n < trk->cfg.topup_below && trk->topup_turn) || trk->n == 0) {
         inf.n_new = (uint16_t)detect(trk, (int)trk->cfg.target - (int)trk->n);
         if (inf.n_new > 0) {
             inf.flags |= RP_TRACK_TOPPED_UP;

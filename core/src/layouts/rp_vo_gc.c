@@ -365,7 +365,7 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
             flags |= RP_EST_DEGRADED;
         }
     }
-    rp_vo_gc_scale_step(vo, fs);
+    rp_vo_gc_scale_step(vo, fs, 0);
     vo->frame = 1;
     vo->prev_utime = fs->utime;
     fill_estimate(vo, fs, flags | RP_EST_SCALE_WEAK, est);
@@ -478,8 +478,9 @@ static rp_status_t refind(rp_vo_gc_t *vo, uint32_t m, uint32_t first_used, rp_ek
  * gated update, then (cfg.ransac, metric structure) the re-find when most were left out or the
  * update failed with enough of them. */
 static rp_status_t pose_update(rp_vo_gc_t *vo, uint32_t m, uint32_t n_mature,
-                               rp_ekf_info_t *info)
+                               rp_ekf_info_t *info, int *refind_ran)
 {
+    *refind_ran = 0;
     vo->ekf_pred = vo->ekf;
     rp_status_t st;
     if (vo->cfg.one_point) {
@@ -495,6 +496,7 @@ static rp_status_t pose_update(rp_vo_gc_t *vo, uint32_t m, uint32_t n_mature,
     }
     const rp_ekf_info_t first_info = *info;
     memcpy(vo->used, vo->pused, m); /* vo->used is rebuilt from vo->pused after the update */
+    *refind_ran = 1;
     if (refind(vo, m, st == RP_OK ? first_info.n_used : 0u, info) == RP_OK) {
         return RP_OK;
     }
@@ -530,13 +532,14 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
     rp_status_t st = rp_ekf_predict(&vo->ekf, dt);
     uint16_t n_gated = 0;
     uint32_t n_mature = 0;
+    int refind_ran = 0;
     for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
         est->n_used[cam] = 0;
     }
     if (st == RP_OK) {
         const uint32_t m = select_for_pose(vo, n, &n_mature);
         rp_ekf_info_t info;
-        st = pose_update(vo, m, n_mature, &info);
+        st = pose_update(vo, m, n_mature, &info, &refind_ran);
         n_gated = info.n_gated;
         if (info.cov_reset) {
             flags |= RP_EST_COV_RESET;
@@ -563,7 +566,7 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
             flags |= RP_EST_SCALE_WEAK;
         }
         refine_structure(vo, n);
-        rp_vo_gc_scale_step(vo, fs);
+        rp_vo_gc_scale_step(vo, fs, refind_ran);
     } else {
         flags |= RP_EST_LOST;
     }

@@ -241,15 +241,16 @@ static void take_adjustment(rp_vo_gc_t *vo)
 
 /* Step 6 (rp_vo_gc.h): keep this frame as a keyframe every ba_stride frames and, every ba_every
  * keyframes, fuse the map's unit that the window's adjustment implies. */
-void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs)
+void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, int busy)
 {
     if (!(vo->cfg.mscale_sigma > RP_C(0.0))) {
         return;
     }
     vo->mu_var += vo->cfg.mscale_q * vo->mu * vo->mu;
     /* an adjustment under way advances by one piece per frame (start, steps, result), so no
-     * frame pays for all of it; a keyframe due before it is done finishes it first */
-    if (ba_state(vo) == RP_GCBA_STARTED || ba_state(vo) == RP_GCBA_ITERATING) {
+     * frame pays for all of it; nor one that re-found its pose (rig RANSAC costs about a
+     * piece): its piece waits a frame; a keyframe due before it is done finishes it first */
+    if (!busy && (ba_state(vo) == RP_GCBA_STARTED || ba_state(vo) == RP_GCBA_ITERATING)) {
         if (rp_gcba_step(&vo->ba) != RP_OK) {
             vo->n_ba_rejected++;
         }

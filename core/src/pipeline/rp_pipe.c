@@ -432,6 +432,18 @@ rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est)
     }
     memset(pipe->fs.n, 0, sizeof(pipe->fs.n));
     pipe->fs.utime = utime;
+    /* top-up turns (rp_pipe.h): the d-th detecting tracker on frame sets d modulo their count */
+    uint8_t n_det = 0;
+    for (uint8_t t = 0; t < pipe->n_trk; ++t) {
+        n_det = (uint8_t)(n_det + !pipe->trk_right[t]);
+    }
+    for (uint8_t t = 0, d = 0; t < pipe->n_trk; ++t) {
+        if (!pipe->trk_right[t]) {
+            /* ignored: cannot fail: the pipeline's own tracker */
+            (void)rp_track_set_topup_turn(&pipe->trk[t], pipe->info.frame % n_det == d);
+            ++d;
+        }
+    }
     for (uint8_t k = 0; k < RP_MAX_PAIRS; ++k) {
         pipe->pm[k].done = 0;
     }

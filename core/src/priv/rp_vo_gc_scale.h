@@ -16,9 +16,10 @@ void rp_vo_gc_set_mu(rp_vo_gc_t *vo, rp_real mu);
 void rp_vo_gc_scale_reset(rp_vo_gc_t *vo);
 
 /* After the pose update of frame set fs (no-op while mscale_sigma is 0): advance an adjustment
- * under way by one piece and take it when solved; every ba_stride frames keep a keyframe, every
- * ba_every keyframes start an adjustment. A taken adjustment changes mu, the landmarks and the
- * filter's pose (rp_vo_gc.h, step 6). */
-void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs);
+ * under way by one piece (not when busy: the frame set re-found its pose, step 2, and the
+ * piece waits for the next one) and take it when solved; every ba_stride frames keep a
+ * keyframe, every ba_every keyframes start an adjustment. A taken adjustment changes mu, the
+ * landmarks and the filter's pose (rp_vo_gc.h, step 6). */
+void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, int busy);
 
 #endif /* RP_PRIV_VO_GC_SCALE_H */
