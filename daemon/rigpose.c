@@ -52,20 +52,10 @@
 #include "rigpose/rp_hal_sim.h"
 #include "rp_args.h"
 #include "rp_est.h"
+#include "rp_feats.h"
 #include "rp_lcmsrc.h"
 #include "rp_publish.h"
 #include "rp_stats.h"
-
-enum {
-    EXIT_DONE = 0,
-    EXIT_USAGE = 1,
-    EXIT_CONFIG = 2,
-    EXIT_LCM = 3,
-    EXIT_SOURCE = 4,
-    EXIT_ESTIMATOR = 5,
-    EXIT_SOURCE_FAILED = 6,
-    EXIT_STATS = 7
-};
 
 /* Grab errors in a row (not timeouts) after which the source counts as failed for good. */
 #define MAX_GRAB_ERRORS 50
@@ -130,23 +120,6 @@ static const char *instance_esc(void)
     return esc(t);
 }
 
-/* lcm.instance, or HOST:PID. */
-static void instance_init(const char *configured)
-{
-    char host[64] = "host";
-    char name[sizeof g_instance + 1];
-    if (configured[0] != '\0') {
-        snprintf(name, sizeof name, "%s", configured);
-    } else {
-        if (gethostname(host, sizeof host - 1) != 0) {
-            snprintf(host, sizeof host, "host");
-        }
-        host[sizeof host - 1] = '\0';
-        snprintf(name, sizeof name, "%.20s:%ld", host, (long)getpid());
-    }
-    memset(g_instance, 0, sizeof g_instance);
-    memcpy(g_instance, name, strnlen(name, sizeof g_instance - 1));
-}
 
 /* A pose heard on our own pose channel: ours (udpm loops back), or another daemon's. */
 static void on_pose_heard(const lcm_recv_buf_t *rbuf, const char *channel,
@@ -621,7 +594,7 @@ int main(int argc, char **argv)
         rp_est_close(&g_est);
         return EXIT_LCM;
     }
-    instance_init(g_cfg.instance);
+    rp_feats_instance(g_cfg.instance, g_instance);
     /* Listen on our own pose channel where a second publisher could be heard (not on a log
      * file being written). */
     if ((strncmp(g_cfg.lcm_url, "udpm://", 7) == 0 || strncmp(g_cfg.lcm_url, "memq://", 7) == 0) &&
@@ -639,15 +612,7 @@ int main(int argc, char **argv)
         return EXIT_SOURCE;
     }
 
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
-    sigaction(SIGHUP, &sa, NULL);  /* a closed terminal: stop as for SIGTERM, with the summary */
-    sigaction(SIGPIPE, &sa, NULL); /* stdout piped into a reader that quit: the same, the
-                                    * summary on stderr (main) */
+    rp_feats_stop_signals(on_signal); /* SIGPIPE: the summary then goes to stderr (below) */
 
     printf("rigpose: %s: instance '%s', source %s, %u cameras, method %s, %u thread%s, "
            "LCM %s (%s, %s)\n",

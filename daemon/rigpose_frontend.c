@@ -48,15 +48,6 @@
 #include "rp_feats.h"
 #include "rp_publish.h"
 
-enum {
-    EXIT_DONE = 0,
-    EXIT_USAGE = 1,
-    EXIT_CONFIG = 2,
-    EXIT_LCM = 3,
-    EXIT_SOURCE = 4,
-    EXIT_PIPE = 5,
-    EXIT_SOURCE_FAILED = 6
-};
 
 #define MAX_GRAB_ERRORS 50
 
@@ -420,7 +411,7 @@ int main(int argc, char **argv)
     if (pst != RP_OK) {
         fprintf(stderr, "rigpose-frontend: %s: method %s refused the configuration: %s\n", config,
                 rp_pipe_layout_name(g_cfg.pipe.layout), rp_status_str(pst));
-        return EXIT_PIPE;
+        return EXIT_ESTIMATOR;
     }
     if (parse_cameras(cameras) != 0) {
         usage(stderr);
@@ -437,29 +428,15 @@ int main(int argc, char **argv)
         fprintf(stderr, "rigpose-frontend: LCM: cannot use '%s'\n", g_cfg.lcm_url);
         return EXIT_LCM;
     }
-    {   /* HOST:PID: a restarted front end is a new instance (rp_lcmsrc.h) */
-        char host[64] = "host", name[64];
-        if (gethostname(host, sizeof host - 1) != 0) {
-            snprintf(host, sizeof host, "host");
-        }
-        host[sizeof host - 1] = '\0';
-        snprintf(name, sizeof name, "%.20s:%ld", host, (long)getpid());
-        memset(g_instance, 0, sizeof g_instance);
-        memcpy(g_instance, name, strnlen(name, sizeof g_instance - 1));
-    }
+    /* HOST:PID: a restarted front end is a new instance (rp_lcmsrc.h) */
+    rp_feats_instance(NULL, g_instance);
 
     rp_hal_source_t *src = NULL;
     if (source_open(&src) != RP_HAL_OK) {
         lcm_destroy(lcm);
         return EXIT_SOURCE;
     }
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
-    sigaction(SIGHUP, &sa, NULL);
+    rp_feats_stop_signals(on_signal);
 
     printf("rigpose-frontend: %s: instance '%.32s', cameras", config, (const char *)g_instance);
     for (uint8_t i = 0; i < g_n_own; ++i) {

@@ -4,8 +4,10 @@
 #include "rp_feats.h"
 
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 int rp_feats_channel(const char *prefix, uint8_t cam, char *out, size_t cap)
 {
@@ -100,4 +102,33 @@ int rp_feats_check(const rigpose_features_t *m, uint8_t cam, uint8_t n_cams, con
         *why = w != NULL ? w : "";
     }
     return w != NULL ? -1 : 0;
+}
+
+void rp_feats_instance(const char *configured, int8_t out[32])
+{
+    char host[64] = "host";
+    char name[33];
+    if (configured != NULL && configured[0] != '\0') {
+        snprintf(name, sizeof name, "%s", configured);
+    } else {
+        if (gethostname(host, sizeof host - 1) != 0) {
+            snprintf(host, sizeof host, "host");
+        }
+        host[sizeof host - 1] = '\0';
+        snprintf(name, sizeof name, "%.20s:%ld", host, (long)getpid());
+    }
+    memset(out, 0, 32);
+    memcpy(out, name, strnlen(name, 31));
+}
+
+void rp_feats_stop_signals(void (*handler)(int))
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = handler;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGHUP, &sa, NULL);
+    sigaction(SIGPIPE, &sa, NULL);
 }

@@ -32,4 +32,24 @@ int rp_feats_partner(const rp_pipe_cfg_t *cfg, uint8_t cam);
  * why (a static string). */
 int rp_feats_check(const rigpose_features_t *m, uint8_t cam, uint8_t n_cams, const char **why);
 
+/* Exit codes of both programs (daemon/README.md); a front end never writes --stats-json. */
+enum {
+    EXIT_DONE = 0,
+    EXIT_USAGE = 1,
+    EXIT_CONFIG = 2,
+    EXIT_LCM = 3,
+    EXIT_SOURCE = 4,
+    EXIT_ESTIMATOR = 5,    /* the estimator (or a front end's pipeline) refused the configuration */
+    EXIT_SOURCE_FAILED = 6,
+    EXIT_STATS = 7
+};
+
+/* What both programs do at start: their instance name (pose_t / features_t .instance) into
+ * out, NUL-padded: configured if not empty (cut at 31 characters), else HOST:PID (a restarted
+ * process is a new instance); and the stop signals SIGINT, SIGTERM, SIGHUP (a closed terminal)
+ * and SIGPIPE (stdout piped into a reader that quit) sent to handler, so that each ends with
+ * its summary instead of dying. */
+void rp_feats_instance(const char *configured, int8_t out[32]);
+void rp_feats_stop_signals(void (*handler)(int));
+
 #endif /* RP_FEATS_H */
