@@ -77,13 +77,33 @@ rp_status_t rp_est_step(rp_est_t *est, const rp_frameset_t *fs, rp_estimate_t *o
     return rp_pipe_step_feats(&est->pipe, fs, out);
 }
 
-/* Job t of a set: tracker t on its camera's image. */
-static void track_job(void *arg, unsigned t)
+/* Job j of a set: tracker order[j] on its camera's image. */
+static void track_job(void *arg, unsigned j)
 {
     rp_est_t *est = (rp_est_t *)arg;
     /* ignored: RP_E_ARG only for a step not begun or t out of range, which the caller rules
      * out; the tracker's own outcome is in the pipeline's report */
-    (void)rp_pipe_track(&est->pipe, (uint8_t)t, est->images, est->n_images);
+    (void)rp_pipe_track(&est->pipe, est->order[j], est->images, est->n_images);
+}
+
+/* The trackers in the order their jobs are handed out: the one whose top-up turn it is (it
+ * may detect: the longest job) first, so that the others fill the other threads meanwhile
+ * (longest job first); the rest in index order. The order changes only which thread runs
+ * what, never a result (rp_pipe.h). */
+static uint8_t track_order(rp_est_t *est)
+{
+    const uint8_t n = rp_pipe_n_trackers(&est->pipe);
+    const uint8_t first = rp_pipe_topup_tracker(&est->pipe);
+    uint8_t k = 0;
+    if (first < n) {
+        est->order[k++] = first;
+    }
+    for (uint8_t t = 0; t < n; ++t) {
+        if (t != first) {
+            est->order[k++] = t;
+        }
+    }
+    return n;
 }
 
 /* Job k of a set: stereo pair k's matching of its new features. */
@@ -116,8 +136,7 @@ rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], 
         if (st == RP_OK) {
             est->images = images;
             est->n_images = n;
-            if (rp_pool_run(&est->pool, rp_pipe_n_trackers(&est->pipe), track_job, est) ==
-                    RP_OK &&
+            if (rp_pool_run(&est->pool, track_order(est), track_job, est) == RP_OK &&
                 rp_pool_run(&est->pool, rp_pipe_n_pairs(&est->pipe), match_job, est) == RP_OK) {
                 /* ignored: RP_E_ARG only for a step not begun; rp_pipe_estimate then says so */
                 (void)rp_pipe_match(&est->pipe); /* every pair matched: the step moves on */

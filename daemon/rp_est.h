@@ -24,6 +24,7 @@ typedef struct {
     rp_pipe_t pipe; /* 5.1-6.3 MB at the default limits: keep an rp_est_t static */
     rp_pool_t pool;
     const rp_image_t *const *images; /* the set being tracked (read by the jobs) */
+    uint8_t order[RP_PIPE_MAX_TRACKERS]; /* trackers in the order their jobs go out */
     uint8_t n_images;
 } rp_est_t;
 

@@ -408,7 +408,13 @@ static rp_pipe_t pipe2;
 static void phased_step(rp_pipe_t *p, const rp_image_t *const ptr[], int64_t utime,
                         rp_estimate_t *est)
 {
+    assert_int_equal(rp_pipe_topup_tracker(p), rp_pipe_n_trackers(p)); /* no step begun */
     assert_ok(rp_pipe_begin(p, utime, NULL)); /* est optional: a front end has none */
+    /* one detecting tracker has the top-up turn (stereo4: a pair's first camera, 0 or 2) */
+    const uint8_t turn = rp_pipe_topup_tracker(p);
+    uint8_t turn_cam = 99;
+    assert_ok(rp_pipe_tracker_cam(p, turn, &turn_cam));
+    assert_true(turn_cam < 4); /* cam1..cam4: no pair's second camera (4, 5) */
     for (int t = rp_pipe_n_trackers(p) - 1; t >= 0; --t) {
         assert_ok(rp_pipe_track(p, (uint8_t)t, ptr, NCAM));
     }

@@ -163,6 +163,8 @@ typedef struct {
                                                * holds (rp_pipe.c, finish) */
     uint8_t was_held;                         /* the last held estimate is not yet followed by
                                                * an update */
+    uint8_t turn_trk;                         /* the tracker whose top-up turn this step is
+                                               * (n_trk: none) */
     uint8_t in_step;                          /* phased step: 0 none, 1 begun (tracking),
                                                * 2 matched (rp_pipe_begin .. rp_pipe_estimate) */
     rp_pipe_info_t info;
@@ -255,6 +257,10 @@ rp_status_t rp_pipe_estimate(rp_pipe_t *pipe, rp_estimate_t *est);
 /* Trackers of the layout (0 for NULL or not initialised) and the rig camera of tracker t
  * (RP_E_ARG: NULL, not initialised, t out of range). */
 uint8_t rp_pipe_n_trackers(const rp_pipe_t *pipe);
+/* The tracker whose turn it is to top up in the step begun (its rp_pipe_track may detect: the
+ * costliest of the step, so a caller spreading trackers over threads starts it first), or
+ * rp_pipe_n_trackers when none, no step is begun or the pipe is NULL / not initialised. */
+uint8_t rp_pipe_topup_tracker(const rp_pipe_t *pipe);
 /* Stereo pairs of the layout (0 for the other layouts, NULL or not initialised). */
 uint8_t rp_pipe_n_pairs(const rp_pipe_t *pipe);
 rp_status_t rp_pipe_tracker_cam(const rp_pipe_t *pipe, uint8_t t, uint8_t *cam);

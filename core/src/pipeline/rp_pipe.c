@@ -437,10 +437,13 @@ rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est)
     for (uint8_t t = 0; t < pipe->n_trk; ++t) {
         n_det = (uint8_t)(n_det + !pipe->trk_right[t]);
     }
+    pipe->turn_trk = pipe->n_trk;
     for (uint8_t t = 0, d = 0; t < pipe->n_trk; ++t) {
         if (!pipe->trk_right[t]) {
+            const uint8_t turn = (uint8_t)(pipe->info.frame % n_det == d);
             /* ignored: cannot fail: the pipeline's own tracker */
-            (void)rp_track_set_topup_turn(&pipe->trk[t], pipe->info.frame % n_det == d);
+            (void)rp_track_set_topup_turn(&pipe->trk[t], turn);
+            pipe->turn_trk = turn ? t : pipe->turn_trk;
             ++d;
         }
     }
@@ -568,6 +571,14 @@ rp_status_t rp_pipe_step_feats(rp_pipe_t *pipe, const rp_frameset_t *fs, rp_esti
     pipe->info.est_status = st;
     finish(pipe, est);
     return st;
+}
+
+uint8_t rp_pipe_topup_tracker(const rp_pipe_t *pipe)
+{
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC) {
+        return 0;
+    }
+    return pipe->in_step == 1 ? pipe->turn_trk : pipe->n_trk;
 }
 
 uint8_t rp_pipe_n_trackers(const rp_pipe_t *pipe)
