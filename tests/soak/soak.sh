@@ -8,7 +8,7 @@
 #      replayed N_IMG times at 30 Hz stamps (a rig standing still), stereo4, through the
 #      replay source, trackers and stereo matcher.
 # Poses go to an LCM log (file://: nothing on the network, nothing lost to a slow reader); the
-# daemon's resident set size is sampled every 0.2 s from /proc. Fails on: an exit other than
+# daemon's resident set size is sampled every 0.02 s from /proc. Fails on: an exit other than
 # 0, a pose count other than asked, a gap in seq, a non-finite pose or covariance, any LOST or
 # COV_RESET flag (neither has a cause on these runs), resident memory growing by 1 % or more
 # after the warm-up (the first fifth of the run), compared with the largest sample of the
@@ -33,7 +33,7 @@ run() {
   : >"$TMP/$name.rss"
   while kill -0 $pid 2>/dev/null; do
     awk '/^VmRSS:/ {print $2}' /proc/$pid/status 2>/dev/null >>"$TMP/$name.rss"
-    sleep 0.2
+    sleep 0.02
   done
   wait $pid; echo $? >"$TMP/$name.rc"
   echo "$(date +%s.%N) - $t0" | bc >"$TMP/$name.secs"
