@@ -91,8 +91,7 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
         p->utime = m->utime;
         p->first_rx_us = now;
         memset(p->have, 0, sizeof p->have);
-        memset(p->fs.n, 0, sizeof p->fs.n);
-        p->fs.utime = m->utime;
+        rp_frameset_reset(&p->fs, m->utime);
     }
     if (p->have[k]) {
         s->n_bad++; /* a second message of one camera for one set */

@@ -661,8 +661,7 @@ void surface_features(const Sequence &seq, const std::vector<double> &pts, int n
         tp[c] = (rp_real)seq.truth(j)[c];
     }
     rp_pose_lin_t pl;
-    std::memset(fs->n, 0, sizeof fs->n);
-    fs->utime = seq.utime(j);
+    rp_frameset_reset(fs, seq.utime(j));
     if (rp_pose_lin_set(&pl, tp) != RP_OK) {
         return;
     }

@@ -441,10 +441,7 @@ uint32_t rp_sim_frame(const rp_sim_run_t *sr, uint32_t j, rp_frameset_t *fs)
     cand_t heap[RP_MAX_FEATS_PER_CAM];
     uint32_t total = 0;
 
-    fs->utime = (int64_t)llround((double)j * cfg->frame_dt * 1e6);
-    for (int k = 0; k < RP_MAX_CAMS; ++k) {
-        fs->n[k] = 0;
-    }
+    rp_frameset_reset(fs, (int64_t)llround((double)j * cfg->frame_dt * 1e6));
 
     for (int k = 0; k < RP_SIM_NCAMS; ++k) {
         const rp_rig_cam_t *rc = &sr->rig.cam[k];

@@ -153,6 +153,7 @@ rp_hal_status_t rp_hal_sim_grab(rp_hal_sim_t *sim, rp_hal_set_t *set)
         f->seq = j;
         if (sim->opts.drop_cam == (int16_t)k && j >= sim->opts.drop_from) {
             sim->fs.n[k] = 0;
+            sim->fs.cam_flags[k] |= RP_FS_NO_IMAGE;
             f->flags = RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE;
             sim->drops[k]++;
         }

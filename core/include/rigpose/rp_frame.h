@@ -19,13 +19,36 @@ typedef struct {
     rp_real uv[2]; /* pixel position (u, v), distorted (as seen in the image), pixels */
 } rp_feat_t;
 
-/* Synchronised features of all cameras at one instant. Camera k's features are
- * f[k][0 .. n[k]-1]; a camera with no image this time has n[k] = 0. */
+/* rp_frameset_t.cam_flags bits */
+enum {
+    RP_FS_NO_IMAGE = 1u << 0 /* the camera delivered no image for this set (its n is 0); a
+                              * camera with an image but no features has n = 0 without it */
+};
+
+/* The features of all cameras for one frame set. Camera k's features are f[k][0 .. n[k]-1].
+ * The set's time is utime; camera k captured its image at utime + cam_dt_us[k] (its own clock
+ * stamp: free-running cameras are not simultaneous). Estimators apply camera k's features at
+ * that time (rp_obs_t.dt), plus the camera's estimated clock offset when they estimate one.
+ * All-zero cam_dt_us and cam_flags (what rp_frameset_reset and a zeroed struct give) is a
+ * synchronised set in which every camera delivered an image. */
 typedef struct {
-    int64_t utime;                 /* capture time, microseconds */
-    uint16_t n[RP_MAX_CAMS];       /* features per camera */
+    int64_t utime;                   /* time of the set, microseconds */
+    uint16_t n[RP_MAX_CAMS];         /* features per camera */
+    int32_t cam_dt_us[RP_MAX_CAMS];  /* camera k's capture time minus utime, microseconds */
+    uint8_t cam_flags[RP_MAX_CAMS];  /* RP_FS_* of camera k */
     rp_feat_t f[RP_MAX_CAMS][RP_MAX_FEATS_PER_CAM];
 } rp_frameset_t;
+
+/* Start filling fs for a set at utime: no features, every camera synchronised and present. */
+static inline void rp_frameset_reset(rp_frameset_t *fs, int64_t utime)
+{
+    fs->utime = utime;
+    for (int k = 0; k < RP_MAX_CAMS; ++k) {
+        fs->n[k] = 0;
+        fs->cam_dt_us[k] = 0;
+        fs->cam_flags[k] = 0;
+    }
+}
 
 /* Estimator health and events, as flags (published as they are). */
 enum {

@@ -85,6 +85,7 @@ rp_status_t rp_lmtab_gather(const rp_lmtab_t *t, const rp_frameset_t *fs, const 
             o->uv[1] = ft->uv[1];
             memcpy(o->M, t->pt[s].M, sizeof(o->M));
             o->w = RP_C(1.0);
+            o->dt = (rp_real)fs->cam_dt_us[cam] * RP_C(1e-6);
             o->cam = cam;
             ids[k] = ft->id;
             k++;

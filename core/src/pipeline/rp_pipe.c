@@ -290,6 +290,7 @@ static void track_one(rp_pipe_t *pipe, uint8_t t, const rp_image_t *img, int64_t
     (void)rp_track_next_serial(trk, &pipe->born_k[t]);
     pipe->fs.n[cam] = 0;
     if (img == NULL || img->data == NULL) {
+        pipe->fs.cam_flags[cam] |= RP_FS_NO_IMAGE;
         info->cam_state[cam] = RP_PIPE_CAM_MISSING;
         info->cam_status[cam] = RP_E_ARG;
         return;
@@ -430,8 +431,7 @@ rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est)
     if (st0 != RP_OK) {
         return st0;
     }
-    memset(pipe->fs.n, 0, sizeof(pipe->fs.n));
-    pipe->fs.utime = utime;
+    rp_frameset_reset(&pipe->fs, utime);
     /* top-up turns (rp_pipe.h): the d-th detecting tracker on frame sets d modulo their count */
     uint8_t n_det = 0;
     for (uint8_t t = 0; t < pipe->n_trk; ++t) {
