@@ -2,6 +2,7 @@
  * test_ekf.c - the pose EKF: prediction, the iterated update, consistency (NEES) on the paper's
  * simulation with known structure, gating, and bad input that must leave the filter usable.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -30,6 +31,7 @@ static uint32_t sim_obs(const rp_sim_run_t *sr, const rp_frameset_t *fs, const u
                 o->M[a] = (rp_real)sr->points[3 * f->id + (uint32_t)a];
             }
             o->w = RP_C(1.0);
+            o->dt = RP_C(0.0);
             o->cam = k;
         }
     }
@@ -327,6 +329,194 @@ static void test_broken_covariance_is_reset_and_filter_recovers(void **state)
     free_fixture(fx);
 }
 
+/* ---- per-camera capture times and clock offsets (rp_ekf.h, issue 15) ------------------------ */
+
+/* The rig under the filter's own model: constant velocity V (m/s) and world-frame rate W
+ * (rad/s) from the identity, so d(t) = V t and R(t) = Exp(W t). */
+static const rp_real cv_V[3] = {0.10, -0.05, 0.08}, cv_W[3] = {0.3, 0.9, -0.2};
+
+static void cv_pose(double t, rp_real p[6])
+{
+    const rp_real w[3] = {(rp_real)t * cv_W[0], (rp_real)t * cv_W[1], (rp_real)t * cv_W[2]};
+    rp_real R[9];
+    rp_rot_exp(w, R);
+    for (int i = 0; i < 3; ++i) {
+        p[i] = (rp_real)t * cv_V[i];
+    }
+    assert_ok(rp_rot_to_angles(R, p + 3));
+}
+
+/* Observations of the sim's points by every camera k, each captured at true time
+ * t + toff_true[k] but stamped stamp_dt[k] after t (obs.dt); Gaussian pixel noise from rng. */
+static uint32_t cv_obs(const rp_sim_run_t *sr, double t, const double toff_true[RP_SIM_NCAMS],
+                       const double stamp_dt[RP_SIM_NCAMS], double noise_px, rp_rng_t *rng,
+                       rp_obs_t *obs, uint32_t cap)
+{
+    uint32_t n = 0;
+    for (uint8_t k = 0; k < RP_SIM_NCAMS; ++k) {
+        rp_real p[6];
+        cv_pose(t + stamp_dt[k] + toff_true[k], p);
+        rp_pose_lin_t pl;
+        assert_ok(rp_pose_lin_set(&pl, p));
+        uint32_t nk = 0;
+        for (uint32_t i = 0; i < sr->cfg.n_points && nk < 60 && n < cap; i += 7) {
+            rp_real M[3], uv[2];
+            for (int a = 0; a < 3; ++a) {
+                M[a] = (rp_real)sr->points[3 * i + (uint32_t)a];
+            }
+            if (rp_rig_project(&sr->rig, k, &pl, M, uv, NULL, NULL) != RP_OK ||
+                !rp_cam_in_image(&sr->rig.cam[k].cam, uv)) {
+                continue;
+            }
+            rp_obs_t *o = &obs[n++];
+            o->uv[0] = uv[0] + (rp_real)(noise_px * rp_rng_gauss(rng));
+            o->uv[1] = uv[1] + (rp_real)(noise_px * rp_rng_gauss(rng));
+            memcpy(o->M, M, sizeof(M));
+            o->w = RP_C(1.0);
+            o->dt = (rp_real)stamp_dt[k];
+            o->cam = k;
+            nk++;
+        }
+    }
+    return n;
+}
+
+/* Runs the filter over `frames` sets at 30 Hz on cv_* with the given true offsets and stamps;
+ * returns the largest pose error (translation m + rotation rad) over the last half. */
+static double cv_run(rp_ekf_t *ekf, const rp_sim_run_t *sr, const double toff_true[],
+                     const double stamp_dt[], double noise_px, int frames, rp_obs_t *obs,
+                     uint32_t cap)
+{
+    rp_rng_t rng;
+    rp_rng_seed(&rng, 11);
+    const double dt = 1.0 / 30.0;
+    double worst = 0.0;
+    for (int j = 1; j <= frames; ++j) {
+        assert_ok(rp_ekf_predict(ekf, (rp_real)dt));
+        const uint32_t n = cv_obs(sr, j * dt, toff_true, stamp_dt, noise_px, &rng, obs, cap);
+        assert_ok(rp_ekf_update(ekf, &sr->rig, obs, n, NULL, NULL));
+        rp_real truth[6], d[6];
+        cv_pose(j * dt, truth);
+        rp_pose_minus(ekf->x, truth, d);
+        const double e = sqrt((double)(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])) +
+                         sqrt((double)(d[3] * d[3] + d[4] * d[4] + d[5] * d[5]));
+        if (j > frames / 2 && e > worst) {
+            worst = e;
+        }
+    }
+    return worst;
+}
+
+static rp_ekf_t *cv_ekf(void)
+{
+    /* started 4 mm / 4 mrad off the truth (about one sigma), at the true rates */
+    rp_real x0[N];
+    const rp_real off[6] = {0.004, -0.003, 0.002, 0.003, -0.002, 0.004};
+    cv_pose(0.0, x0);
+    assert_ok(rp_pose_plus(x0, off, x0));
+    for (int i = 0; i < 3; ++i) {
+        x0[6 + i] = cv_V[i];
+        x0[9 + i] = cv_W[i];
+    }
+    return make_ekf(x0, RP_C(0.005), RP_C(0.05));
+}
+
+static void test_features_apply_at_their_cameras_times(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0, 2);
+    /* camera k captured 0, 12, -25, 40, 20, -10 ms after the set's time, and stamped so */
+    const double stamp[RP_SIM_NCAMS] = {0.0, 0.012, -0.025, 0.040, 0.020, -0.010};
+    const double none[RP_SIM_NCAMS] = {0};
+    rp_ekf_t *timed = cv_ekf();
+    const double e_timed = cv_run(timed, &fx->sr, none, stamp, 0.0, 30, fx->obs, 2000);
+    /* the same images with the stamps lost: every camera taken as at the set's time */
+    rp_ekf_t *flat = cv_ekf();
+    rp_real off[RP_MAX_CAMS] = {0};
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        off[k] = (rp_real)stamp[k]; /* true capture = stamp (dt 0) + the offset: the same */
+    }
+    assert_ok(rp_ekf_toff_set(flat, 0, off, NULL, RP_C(0.0)));
+    const double e_known = cv_run(flat, &fx->sr, stamp, none, 0.0, 30, fx->obs, 2000);
+    rp_ekf_t *blind = cv_ekf();
+    const double e_blind = cv_run(blind, &fx->sr, stamp, none, 0.0, 30, fx->obs, 2000);
+    print_message("noise-free, cameras 0..+40 ms apart: worst pose error with their times %.2e, "
+                  "as known offsets %.2e, as simultaneous %.2e\n", e_timed, e_known, e_blind);
+    /* the filter's model is exact here: only the first-order chart composition is left */
+    assert_true(e_timed < RP_TOL(1e-5, 1e-3));
+    assert_true(e_known < RP_TOL(1e-5, 1e-3));
+    assert_true(e_blind > 100.0 * e_timed);
+    free(timed);
+    free(flat);
+    free(blind);
+    free_fixture(fx);
+}
+
+static void test_clock_offsets_are_estimated(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0, 2);
+    const double truth[RP_SIM_NCAMS] = {0.0, 0.012, -0.025, 0.040, 0.005, -0.008};
+    const double none[RP_SIM_NCAMS] = {0};
+    rp_ekf_t *ekf = cv_ekf();
+    const rp_real sig0[RP_MAX_CAMS] = {0, 0.05, 0.05, 0.05, 0.05, 0.05};
+    assert_ok(rp_ekf_toff_set(ekf, 0x3e, NULL, sig0, RP_C(1e-8)));
+    const double worst = cv_run(ekf, &fx->sr, truth, none, 0.5, 50, fx->obs, 2000);
+    for (int k = 1; k < RP_SIM_NCAMS; ++k) {
+        const double est = (double)ekf->toff[k], sig = sqrt((double)ekf->Poo[k * RP_MAX_CAMS + k]);
+        print_message("camera %d: offset %+.3f ms, estimated %+.3f ms, sigma %.3f ms\n", k,
+                      1e3 * truth[k], 1e3 * est, 1e3 * sig);
+        assert_true(fabs(est - truth[k]) < 0.5e-3);           /* the issue's 0.5 ms */
+        assert_true(fabs(est - truth[k]) < 4.0 * sig + 1e-6); /* and consistent */
+    }
+    print_message("worst pose error over the last 25 frames: %.2e\n", worst);
+    assert_true(worst < 0.005);
+    /* an offset state survives a restart at a new pose, without its cross-covariance */
+    rp_ekf_t *fresh = cv_ekf();
+    assert_ok(rp_ekf_toff_carry(fresh, ekf));
+    assert_int_equal(fresh->toff_mask, 0x3e);
+    assert_true(fresh->toff[3] == ekf->toff[3] && fresh->Poo[7] == ekf->Poo[7]);
+    for (int i = 0; i < N * RP_MAX_CAMS; ++i) {
+        assert_true(fresh->Pxo[i] == RP_C(0.0));
+    }
+    free(fresh);
+    free(ekf);
+    free_fixture(fx);
+}
+
+static void test_toff_set_rejects_bad_input(void **state)
+{
+    (void)state;
+    rp_real x0[N] = {0};
+    rp_ekf_t *ekf = make_ekf(x0, RP_C(0.1), RP_C(0.1));
+    const rp_real sig[RP_MAX_CAMS] = {0.01, 0.01, 0.01, 0.01, 0.01, 0.01};
+    rp_real off[RP_MAX_CAMS] = {0};
+    assert_status(rp_ekf_toff_set(NULL, 0, NULL, NULL, 0), RP_E_ARG);
+    assert_status(rp_ekf_toff_set(ekf, 0x01, NULL, sig, 0), RP_E_ARG); /* the reference */
+    assert_status(rp_ekf_toff_set(ekf, 0x02, NULL, NULL, 0), RP_E_ARG); /* no sigma */
+    assert_status(rp_ekf_toff_set(ekf, (uint8_t)(1u << RP_MAX_CAMS), NULL, sig, 0), RP_E_ARG);
+    assert_status(rp_ekf_toff_set(ekf, 0x02, NULL, sig, RP_C(-1.0)), RP_E_ARG);
+    off[2] = (rp_real)NAN;
+    assert_status(rp_ekf_toff_set(ekf, 0x02, off, sig, 0), RP_E_NAN);
+    assert_int_equal(ekf->toff_mask, 0);
+    /* a non-finite stamp skips that observation only */
+    fixture_t *fx = fixture(0.0, 2);
+    rp_ekf_t *e2 = cv_ekf();
+    const double none[RP_SIM_NCAMS] = {0};
+    rp_rng_t rng;
+    rp_rng_seed(&rng, 3);
+    assert_ok(rp_ekf_predict(e2, RP_C(1.0 / 30.0)));
+    const uint32_t n = cv_obs(&fx->sr, 1.0 / 30.0, none, none, 0.0, &rng, fx->obs, 2000);
+    fx->obs[0].dt = (rp_real)NAN;
+    rp_ekf_info_t info;
+    assert_ok(rp_ekf_update(e2, &fx->sr.rig, fx->obs, n, fx->used, &info));
+    assert_int_equal(info.n_bad, 1);
+    assert_int_equal(fx->used[0], 0);
+    free(e2);
+    free(ekf);
+    free_fixture(fx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -338,6 +528,9 @@ int main(void)
         cmocka_unit_test(test_bad_measurements_are_skipped_and_filter_stays_usable),
         cmocka_unit_test(test_too_few_features_leaves_prediction),
         cmocka_unit_test(test_broken_covariance_is_reset_and_filter_recovers),
+        cmocka_unit_test(test_features_apply_at_their_cameras_times),
+        cmocka_unit_test(test_clock_offsets_are_estimated),
+        cmocka_unit_test(test_toff_set_rejects_bad_input),
     };
     return cmocka_run_group_tests_name("ekf", tests, NULL, NULL);
 }

@@ -10,10 +10,21 @@
  * Plant: constant velocity and angular rate, t+ = t + dt v, R+ = Exp(dt omega) R, driven by
  * white acceleration noise (continuous spectral densities q_trans (m^2/s^3) and q_rot
  * (rad^2/s^3)); in the chart F = [I dt I; 0 I] diag(I, Exp(dt omega), I, I).
- * Measurement: the pixel of each tracked feature through eqs. (1)-(2) (rp_rig_project).
+ * Measurement: the pixel of each tracked feature through eqs. (1)-(2) (rp_rig_project), at
+ * its camera's capture time. The state is at the frame set's time t; camera k captured at
+ * t + delta_k with delta_k = obs.dt (its stamp minus t) + toff[k] (its clock offset, below),
+ * and the feature is predicted from the pose the constant-velocity model gives there:
+ * p(delta) = p [+] delta [v; omega] (the chart below: t + delta v, Exp(delta omega) R).
+ * Clock offsets (free-running cameras, issue 15): camera k's true capture time is its stamp
+ * plus toff[k] (s). Offsets are either fixed (known) or states of the filter (toff_mask):
+ * a random walk of density q_toff (s^2/s), observed through the image motion of the features
+ * (d uv / d toff_k = J_pose [v; omega]), as OpenVINS estimates a camera-IMU time offset.
+ * Camera 0 is the reference (its offset is not a state).
  * Update: iterated EKF (Gauss-Newton on the posterior, `iterations` relinearisations), computed
- * in information form (the sum of H^T R^-1 H over features is 6x6, whatever their number), so
- * the covariance stays symmetric positive definite by construction.
+ * in information form (the sum of H^T R^-1 H over features is DxD, whatever their number), so
+ * the covariance stays symmetric positive definite by construction. D = 6 (the pose; the rate
+ * follows by conditioning) when every feature is at the state's time and no offset is a
+ * state; else D = 12 + the offset states (pose, rate and offsets updated jointly).
  * Gate: every iteration tests each feature's innovation r against the current iterate, with
  * S = J C J^T + sigma^2 / w I (C: the prior pose covariance in the first iteration, the last
  * iteration's posterior after), and leaves it out when r^T S^-1 r > gate_chi2. An iteration
@@ -65,6 +76,14 @@ typedef struct {
                                      * start), s */
     uint8_t held;                   /* 1 once t_unobs passed prm.max_predict_s: the pose is held
                                      * (velocity mean zero) until the next successful update */
+    /* Clock offsets (top of this file): all zero after rp_ekf_init (synchronised cameras). */
+    uint8_t toff_mask;              /* bit k: camera k's offset is a state (never bit 0) */
+    rp_real toff[RP_MAX_CAMS];      /* camera k's clock offset: capture = stamp + toff[k], s */
+    rp_real q_toff;                 /* random-walk density of the offset states, s^2/s */
+    rp_real Pxo[RP_EKF_N * RP_MAX_CAMS]; /* cross-covariance of x and the offsets, row-major
+                                     * 12 x RP_MAX_CAMS (columns of non-states are zero) */
+    rp_real Poo[RP_MAX_CAMS * RP_MAX_CAMS]; /* covariance of the offsets, s^2 (rows and
+                                     * columns of non-states are zero) */
 } rp_ekf_t;
 
 typedef struct {
@@ -83,6 +102,17 @@ typedef struct {
  * iterations 0, negative noise), RP_E_NAN. */
 rp_status_t rp_ekf_init(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real x0[RP_EKF_N],
                         const rp_real P0diag[RP_EKF_N]);
+
+/* Set the clock offsets: toff0[k] for every camera (s; NULL: all 0), and which are states
+ * (mask, bit k; bit 0 refused: camera 0 is the reference) with start sigma sigma0[k] (s, > 0
+ * for each state; may be NULL when mask is 0) and random-walk density q (s^2/s, >= 0).
+ * Any cross-covariance with the pose is dropped. RP_E_ARG, RP_E_NAN; nothing changed then. */
+rp_status_t rp_ekf_toff_set(rp_ekf_t *ekf, uint8_t mask, const rp_real toff0[RP_MAX_CAMS],
+                            const rp_real sigma0[RP_MAX_CAMS], rp_real q);
+
+/* Copy src's clock offsets (values, states, their covariance, q) into dst, a filter just
+ * (re)started at a new pose: the cross-covariance with the pose is dropped. RP_E_ARG. */
+rp_status_t rp_ekf_toff_carry(rp_ekf_t *dst, const rp_ekf_t *src);
 
 /* Time update over dt seconds (dt > 0, finite; else RP_E_ARG and no change; RP_E_NAN and no
  * change for a non-finite pose or rate).

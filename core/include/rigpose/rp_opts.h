@@ -52,9 +52,10 @@ typedef double rp_real;
 #define RP_MAX_LANDMARKS 2048
 #endif
 
-/* Largest row or column count a decomposition (Cholesky, QR, SVD) accepts. */
+/* Largest row or column count a decomposition (Cholesky, QR, SVD) accepts: 16, or the pose
+ * EKF's 12 states plus one clock offset per camera but the reference (rp_ekf.h) if more. */
 #ifndef RP_LA_MAX_DIM
-#define RP_LA_MAX_DIM 16
+#define RP_LA_MAX_DIM (RP_MAX_CAMS + 11 > 16 ? RP_MAX_CAMS + 11 : 16)
 #endif
 
 /* Smallest depth (m, along the camera's z axis) at which a point counts as in front. */
@@ -101,7 +102,8 @@ RP_STATIC_ASSERT(RP_MAX_PAIRS * 2 <= RP_MAX_CAMS, "each stereo pair needs two ca
 RP_STATIC_ASSERT(RP_MAX_FEATS_PER_CAM >= 8 && RP_MAX_FEATS_PER_CAM <= 65535, "feature limit");
 RP_STATIC_ASSERT(RP_MAX_LANDMARKS >= RP_MAX_FEATS_PER_CAM, "landmark table smaller than a camera");
 RP_STATIC_ASSERT((RP_MAX_LANDMARKS & (RP_MAX_LANDMARKS - 1)) == 0, "RP_MAX_LANDMARKS: power of 2");
-RP_STATIC_ASSERT(RP_LA_MAX_DIM >= 12, "the pose EKF needs 12x12 decompositions");
+RP_STATIC_ASSERT(RP_LA_MAX_DIM >= 12 + RP_MAX_CAMS - 1,
+                 "the pose EKF with clock offsets needs (12 + cameras - 1)^2 decompositions");
 RP_STATIC_ASSERT(RP_TRACK_MAX_W >= 32 && RP_TRACK_MAX_W <= 4096, "RP_TRACK_MAX_W out of range");
 RP_STATIC_ASSERT(RP_TRACK_MAX_H >= 32 && RP_TRACK_MAX_H <= 4096, "RP_TRACK_MAX_H out of range");
 RP_STATIC_ASSERT(RP_TRACK_MAX_LEVELS >= 1 && RP_TRACK_MAX_LEVELS <= 6, "pyramid levels 1..6");

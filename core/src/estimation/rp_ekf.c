@@ -24,6 +24,10 @@
 
 #define N RP_EKF_N
 #define NP 6
+#define NO RP_MAX_CAMS
+#define DMAX (N + NO - 1) /* the largest update: 12 states and an offset per camera but cam 0 */
+
+RP_STATIC_ASSERT(DMAX <= RP_LA_MAX_DIM, "the timed update's decompositions exceed RP_LA_MAX_DIM");
 
 rp_ekf_params_t rp_ekf_default_params(void)
 {
@@ -92,6 +96,51 @@ static void symmetrize(rp_real *P, int n)
             P[j * n + i] = m;
         }
     }
+}
+
+rp_status_t rp_ekf_toff_set(rp_ekf_t *ekf, uint8_t mask, const rp_real toff0[RP_MAX_CAMS],
+                            const rp_real sigma0[RP_MAX_CAMS], rp_real q)
+{
+    if (!ekf || (mask & 1u) || (NO < 8 && (mask >> NO) != 0) || (mask && !sigma0)) {
+        return RP_E_ARG;
+    }
+    if (!rp_finite(q) || (toff0 && !rp_all_finite(toff0, NO))) {
+        return RP_E_NAN;
+    }
+    if (q < RP_C(0.0)) {
+        return RP_E_ARG;
+    }
+    for (int k = 0; k < NO; ++k) {
+        if ((mask & (1u << k)) && !(sigma0[k] > RP_C(0.0) && rp_finite(sigma0[k]))) {
+            return RP_E_ARG;
+        }
+    }
+    ekf->toff_mask = mask;
+    ekf->q_toff = q;
+    memset(ekf->Pxo, 0, sizeof(ekf->Pxo));
+    memset(ekf->Poo, 0, sizeof(ekf->Poo));
+    for (int k = 0; k < NO; ++k) {
+        ekf->toff[k] = toff0 ? toff0[k] : RP_C(0.0);
+        if (mask & (1u << k)) {
+            ekf->Poo[k * NO + k] = sigma0[k] * sigma0[k];
+        }
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_ekf_toff_carry(rp_ekf_t *dst, const rp_ekf_t *src)
+{
+    if (!dst || !src) {
+        return RP_E_ARG;
+    }
+    if (dst != src) {
+        dst->toff_mask = src->toff_mask;
+        dst->q_toff = src->q_toff;
+        memcpy(dst->toff, src->toff, sizeof(dst->toff));
+        memcpy(dst->Poo, src->Poo, sizeof(dst->Poo));
+    }
+    memset(dst->Pxo, 0, sizeof(dst->Pxo));
+    return RP_OK;
 }
 
 static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt);
@@ -193,6 +242,29 @@ static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
             P[(NP + j) * N + i] += dt * pvv; /* Pvp = Ppv^T */
         }
     }
+    /* The offsets' cross-covariance: Pxo <- F Pxo (rows 3..5 times Phi, then rows 0..5 plus
+     * dt rows 6..11); the offset states walk: Poo += q_toff dt. */
+    if (ekf->toff_mask) {
+        rp_real *X = ekf->Pxo;
+        for (int j = 0; j < NO; ++j) {
+            rp_real t[3];
+            for (int a = 0; a < 3; ++a) {
+                t[a] = Phi[3 * a] * X[3 * NO + j] + Phi[3 * a + 1] * X[4 * NO + j] +
+                       Phi[3 * a + 2] * X[5 * NO + j];
+            }
+            for (int a = 0; a < 3; ++a) {
+                X[(3 + a) * NO + j] = t[a];
+            }
+            for (int i = 0; i < NP; ++i) {
+                X[i * NO + j] += dt * X[(NP + i) * NO + j];
+            }
+        }
+        for (int k = 0; k < NO; ++k) {
+            if (ekf->toff_mask & (1u << k)) {
+                ekf->Poo[k * NO + k] += ekf->q_toff * dt;
+            }
+        }
+    }
     /* White acceleration noise q per axis: Q = q [dt^3/3 dt^2/2; dt^2/2 dt]. */
     for (int i = 0; i < NP; ++i) {
         rp_real q = i < 3 ? ekf->prm.q_trans : ekf->prm.q_rot;
@@ -205,26 +277,25 @@ static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
     return RP_OK;
 }
 
-/* 2x2 Mahalanobis distance r^T S^-1 r with S = J C J^T + s2 I (J 2x6, C 6x6). */
-rp_real rp_ekf_mahalanobis2(const rp_real J[12], const rp_real C[36], rp_real s2,
-                            const rp_real r[2])
+/* r^T S^-1 r with S = H C H^T + s2 I: H 2xD, C DxD, both row-major. */
+static rp_real maha_d(const rp_real *H, const rp_real *C, int D, rp_real s2, const rp_real r[2])
 {
-    rp_real JC[12];
+    rp_real HC[2 * DMAX];
     for (int a = 0; a < 2; ++a) {
-        for (int j = 0; j < NP; ++j) {
+        for (int j = 0; j < D; ++j) {
             rp_real acc = RP_C(0.0);
-            for (int k = 0; k < NP; ++k) {
-                acc += J[a * NP + k] * C[k * NP + j];
+            for (int k = 0; k < D; ++k) {
+                acc += H[a * D + k] * C[k * D + j];
             }
-            JC[a * NP + j] = acc;
+            HC[a * D + j] = acc;
         }
     }
     rp_real S[4];
     for (int a = 0; a < 2; ++a) {
         for (int b = 0; b < 2; ++b) {
             rp_real acc = RP_C(0.0);
-            for (int k = 0; k < NP; ++k) {
-                acc += JC[a * NP + k] * J[b * NP + k];
+            for (int k = 0; k < D; ++k) {
+                acc += HC[a * D + k] * H[b * D + k];
             }
             S[a * 2 + b] = acc + (a == b ? s2 : RP_C(0.0));
         }
@@ -236,222 +307,214 @@ rp_real rp_ekf_mahalanobis2(const rp_real J[12], const rp_real C[36], rp_real s2
     return (S[3] * r[0] * r[0] - (S[1] + S[2]) * r[0] * r[1] + S[0] * r[1] * r[1]) / det;
 }
 
-/* Posterior pose covariance Cpost = L S^-1 L^T with S = I + L^T A L. */
-static rp_status_t pose_posterior(const rp_real L[36], const rp_real A[36], rp_real Cpost[36])
+rp_real rp_ekf_mahalanobis2(const rp_real J[12], const rp_real C[36], rp_real s2,
+                            const rp_real r[2])
 {
-    rp_real AL[36], S[36], Ls[36], Sinv_Lt[36], Lt[36];
-    rp_status_t st = rp_la_mul(&RP_MAT(6, 6, (rp_real *)A), &RP_MAT(6, 6, (rp_real *)L),
-                               &RP_MAT(6, 6, AL));
+    return maha_d(J, C, NP, s2, r);
+}
+
+/* Posterior covariance Cpost = L S^-1 L^T with S = I + L^T A L (all DxD). */
+static rp_status_t posterior(const rp_real *L, const rp_real *A, int D, rp_real *Cpost)
+{
+    rp_real AL[DMAX * DMAX], S[DMAX * DMAX], Ls[DMAX * DMAX], Sinv_Lt[DMAX * DMAX],
+        Lt[DMAX * DMAX];
+    rp_status_t st = rp_la_mul(&RP_MAT(D, D, (rp_real *)A), &RP_MAT(D, D, (rp_real *)L),
+                               &RP_MAT(D, D, AL));
     if (st != RP_OK) {
         return st;
     }
-    st = rp_la_mul_at_b(&RP_MAT(6, 6, (rp_real *)L), &RP_MAT(6, 6, AL), &RP_MAT(6, 6, S));
+    st = rp_la_mul_at_b(&RP_MAT(D, D, (rp_real *)L), &RP_MAT(D, D, AL), &RP_MAT(D, D, S));
     if (st != RP_OK) {
         return st;
     }
-    for (int i = 0; i < NP; ++i) {
-        S[i * NP + i] += RP_C(1.0);
+    for (int i = 0; i < D; ++i) {
+        S[i * D + i] += RP_C(1.0);
     }
-    symmetrize(S, NP);
-    st = rp_la_chol(&RP_MAT(6, 6, S), &RP_MAT(6, 6, Ls));
+    symmetrize(S, D);
+    st = rp_la_chol(&RP_MAT(D, D, S), &RP_MAT(D, D, Ls));
     if (st != RP_OK) {
         return st;
     }
-    st = rp_la_transpose(&RP_MAT(6, 6, (rp_real *)L), &RP_MAT(6, 6, Lt));
+    st = rp_la_transpose(&RP_MAT(D, D, (rp_real *)L), &RP_MAT(D, D, Lt));
     if (st != RP_OK) {
         return st;
     }
-    st = rp_la_chol_solve(&RP_MAT(6, 6, Ls), &RP_MAT(6, 6, Lt), &RP_MAT(6, 6, Sinv_Lt));
+    st = rp_la_chol_solve(&RP_MAT(D, D, Ls), &RP_MAT(D, D, Lt), &RP_MAT(D, D, Sinv_Lt));
     if (st != RP_OK) {
         return st;
     }
-    st = rp_la_mul(&RP_MAT(6, 6, (rp_real *)L), &RP_MAT(6, 6, Sinv_Lt), &RP_MAT(6, 6, Cpost));
+    st = rp_la_mul(&RP_MAT(D, D, (rp_real *)L), &RP_MAT(D, D, Sinv_Lt), &RP_MAT(D, D, Cpost));
     if (st != RP_OK) {
         return st;
     }
-    symmetrize(Cpost, NP);
+    symmetrize(Cpost, D);
     return RP_OK;
 }
 
 /* Discard a failed update: keep the predicted state, make the covariance symmetric and
- * inflate it by RP_EKF_RESET_INFLATION. */
-static void reset_covariance(rp_ekf_t *ekf, const rp_real P0[N * N])
+ * inflate it by RP_EKF_RESET_INFLATION (the offsets' blocks too). */
+static void reset_covariance(rp_ekf_t *ekf, const rp_ekf_t *e0)
 {
-    memcpy(ekf->P, P0, sizeof(ekf->P));
+    memcpy(ekf->P, e0->P, sizeof(ekf->P));
+    memcpy(ekf->Pxo, e0->Pxo, sizeof(ekf->Pxo));
+    memcpy(ekf->Poo, e0->Poo, sizeof(ekf->Poo));
     symmetrize(ekf->P, N);
+    symmetrize(ekf->Poo, NO);
     for (int i = 0; i < N * N; ++i) {
         ekf->P[i] *= RP_EKF_RESET_INFLATION;
     }
+    for (int i = 0; i < N * NO; ++i) {
+        ekf->Pxo[i] *= RP_EKF_RESET_INFLATION;
+    }
+    for (int i = 0; i < NO * NO; ++i) {
+        ekf->Poo[i] *= RP_EKF_RESET_INFLATION;
+    }
 }
 
-rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
-                          uint8_t *used, rp_ekf_info_t *info)
+/* The block y of the state an update solves for: the pose (D = 6), or the pose, the rate and
+ * the offset states (D = 12 + n_off, a timed update). Offset state i is camera off_cam[i]. */
+typedef struct {
+    int D;
+    uint8_t n_off;
+    uint8_t off_cam[NO];
+    int8_t off_of[NO];  /* camera k -> its offset's index in y, or -1 (not a state) */
+} yblock_t;
+
+static void yblock_set(yblock_t *y, const rp_ekf_t *ekf, const rp_obs_t *obs, uint32_t n)
 {
-    rp_ekf_info_t dummy;
-    if (!info) {
-        info = &dummy;
+    int timed = ekf->toff_mask != 0;
+    for (uint32_t k = 0; k < n && !timed; ++k) {
+        timed = obs[k].cam < NO && obs[k].dt + ekf->toff[obs[k].cam] != RP_C(0.0);
     }
-    memset(info, 0, sizeof(*info));
-    if (!ekf || !rig || (n > 0 && !obs)) {
-        return RP_E_ARG;
+    y->n_off = 0;
+    for (uint8_t c = 0; c < NO; ++c) {
+        y->off_of[c] = -1;
+        if (ekf->toff_mask & (1u << c)) {
+            y->off_of[c] = (int8_t)(N + y->n_off);
+            y->off_cam[y->n_off++] = c;
+        }
     }
-    if (used) {
-        memset(used, 0, n);
-    }
-    const rp_ekf_params_t *prm = &ekf->prm;
-    const rp_real s2 = prm->sigma_px * prm->sigma_px;
+    y->D = timed ? N + y->n_off : NP;
+}
 
-    rp_real P0[N * N], x0[N], Ppp[36], L[36], Cpost[36];
-    memcpy(P0, ekf->P, sizeof(P0));
-    memcpy(x0, ekf->x, sizeof(x0));
-    for (int i = 0; i < NP; ++i) {
-        for (int j = 0; j < NP; ++j) {
-            Ppp[i * NP + j] = P0[i * N + j];
+/* Prior covariance of y (DxD). */
+static void yblock_prior(const yblock_t *y, const rp_ekf_t *ekf, rp_real *Pyy)
+{
+    const int D = y->D, nx = D < N ? D : N;
+    for (int i = 0; i < nx; ++i) {
+        for (int j = 0; j < nx; ++j) {
+            Pyy[i * D + j] = ekf->P[i * N + j];
         }
     }
-    if (!rp_all_finite(P0, N * N) || !rp_all_finite(x0, N) ||
-        rp_la_chol(&RP_MAT(6, 6, Ppp), &RP_MAT(6, 6, L)) != RP_OK) {
-        reset_covariance(ekf, P0);
-        info->cov_reset = 1;
-        return RP_E_DIVERGED;
+    for (int a = 0; a < (D > N ? y->n_off : 0); ++a) {
+        const uint8_t ca = y->off_cam[a];
+        for (int i = 0; i < N; ++i) {
+            Pyy[i * D + N + a] = ekf->Pxo[i * NO + ca];
+            Pyy[(N + a) * D + i] = ekf->Pxo[i * NO + ca];
+        }
+        for (int b = 0; b < y->n_off; ++b) {
+            Pyy[(N + a) * D + N + b] = ekf->Poo[ca * NO + y->off_cam[b]];
+        }
     }
+}
 
-    rp_real p[NP];          /* current iterate, p = x0 [+] dp (rp_rig.h's chart) */
-    rp_real dp[NP] = {0};
-    memcpy(p, x0, sizeof(p));
-    memcpy(Cpost, Ppp, sizeof(Cpost)); /* covariance used by the gate */
-    uint16_t n_used = 0, n_gated = 0, n_bad = 0, n_outside = 0;
-    rp_real sq_sum = RP_C(0.0);
-
-    for (uint8_t it = 0; it < prm->iterations; ++it) {
-        rp_pose_lin_t pl;
-        if (rp_pose_lin_set(&pl, p) != RP_OK) {
-            reset_covariance(ekf, P0);
-            info->cov_reset = 1;
-            return RP_E_DIVERGED;
-        }
-        rp_real A[36] = {0}, b[NP] = {0};
-        /* Gate against the current estimate and covariance. If that rejects more features
-         * than it keeps, the estimate is still poor (a bad prior, or an iteration not yet
-         * converged: residuals are linearisation error, not noise), so this iteration keeps
-         * them all and a later one gates. */
-        int gate = prm->gate_chi2 > RP_C(0.0);
-        for (int pass = 0; pass < 2; ++pass) {
-            memset(A, 0, sizeof(A));
-            memset(b, 0, sizeof(b));
-            n_used = n_gated = n_bad = 0;
-            sq_sum = RP_C(0.0);
-            for (uint32_t k = 0; k < n; ++k) {
-                const rp_obs_t *o = &obs[k];
-                rp_real uv[2], J[12];
-                if (!rp_finite(o->w) || o->w <= RP_C(0.0) || !rp_all_finite(o->uv, 2) ||
-                    o->cam >= rig->n_cams ||
-                    rp_rig_project(rig, o->cam, &pl, o->M, uv, J, NULL) != RP_OK) {
-                    n_bad++;
-                    if (used) {
-                        used[k] = 0;
-                    }
-                    continue;
-                }
-                rp_real r[2] = {o->uv[0] - uv[0], o->uv[1] - uv[1]};
-                if (gate) {
-                    /* innovation of this feature against the current estimate */
-                    rp_real d2 = rp_ekf_mahalanobis2(J, Cpost, s2 / o->w, r);
-                    if (d2 > prm->gate_chi2) {
-                        n_gated++;
-                        if (used) {
-                            used[k] = 0;
-                        }
-                        continue;
-                    }
-                }
-                if (used) {
-                    used[k] = 1;
-                }
-                n_used++;
-                sq_sum += r[0] * r[0] + r[1] * r[1];
-                const rp_real wk = o->w / s2;
-                rp_real rr[2];
-                for (int a = 0; a < 2; ++a) {
-                    rp_real jd = RP_C(0.0);
-                    for (int j = 0; j < NP; ++j) {
-                        jd += J[a * NP + j] * dp[j];
-                    }
-                    rr[a] = r[a] + jd; /* r + J (p_k - p0) */
-                }
-                for (int i = 0; i < NP; ++i) {
-                    const rp_real j0 = J[i] * wk, j1 = J[NP + i] * wk;
-                    b[i] += j0 * rr[0] + j1 * rr[1];
-                    for (int j = 0; j <= i; ++j) {
-                        A[i * NP + j] += j0 * J[j] + j1 * J[NP + j];
-                    }
-                }
-            }
-            if (pass == 0) {
-                n_outside = n_gated;
-            }
-            if (gate && pass == 0 && n_gated > n_used) {
-                gate = 0;
-                continue;
-            }
-            break;
-        }
-        if (n_used < prm->min_features) {
-            /* Not enough to update: the state stays as predicted. */
-            info->n_used = 0;
-            info->n_gated = n_gated;
-            info->n_bad = n_bad;
-            info->n_outside = n_outside;
-            if (used) {
-                memset(used, 0, n);
-            }
-            memcpy(ekf->x, x0, sizeof(x0));
-            memcpy(ekf->P, P0, sizeof(P0));
-            return RP_E_TOO_FEW;
-        }
+/* The state at iterate dy: pose p = x0 [+] dy[0..5], rate xi and offsets toff. */
+static rp_status_t yblock_iterate(const yblock_t *y, const rp_ekf_t *e0, const rp_real *dy,
+                                  rp_real p[NP], rp_real xi[NP], rp_real toff[NO])
+{
+    memcpy(xi, e0->x + NP, NP * sizeof(rp_real));
+    memcpy(toff, e0->toff, NO * sizeof(rp_real));
+    if (y->D > NP) {
         for (int i = 0; i < NP; ++i) {
-            for (int j = i + 1; j < NP; ++j) {
-                A[i * NP + j] = A[j * NP + i];
-            }
+            xi[i] += dy[NP + i];
         }
-        if (pose_posterior(L, A, Cpost) != RP_OK) {
-            reset_covariance(ekf, P0);
-            info->cov_reset = 1;
-            return RP_E_DIVERGED;
-        }
-        for (int i = 0; i < NP; ++i) {
-            rp_real acc = RP_C(0.0);
-            for (int j = 0; j < NP; ++j) {
-                acc += Cpost[i * NP + j] * b[j];
-            }
-            dp[i] = acc;
-        }
-        if (rp_pose_plus(x0, dp, p) != RP_OK) {
-            reset_covariance(ekf, P0);
-            info->cov_reset = 1;
-            return RP_E_DIVERGED;
+        for (int a = 0; a < y->n_off; ++a) {
+            toff[y->off_cam[a]] += dy[N + a];
         }
     }
+    return rp_pose_plus(e0->x, dy, p);
+}
 
-    /* Velocity by conditioning on the pose posterior (see the top of this file). */
-    rp_real Ppv[36], M[36], Dm[36], DM[36], x_new[N], P_new[N * N];
+/* One observation at the iterate: its predicted pixel and its Jacobian H (2xD) on y.
+ * D = 6: H = J_pose at p. Timed: the pose at the camera's time, pc = p [+] delta xi with
+ * delta = obs.dt + toff[cam], H = [J, delta J, J xi at the camera's offset] (the chart's
+ * composition Exp(delta omega) Exp(w) ~ Exp(delta omega + w) taken to first order, as the
+ * predict's). plc caches the camera-time pose of the last camera and delta seen. */
+typedef struct {
+    uint8_t cam;
+    rp_real delta;
+    rp_pose_lin_t pl;
+    int valid;
+} camcache_t;
+
+static rp_status_t obs_predict(const yblock_t *y, const rp_rig_t *rig, const rp_obs_t *o,
+                               const rp_pose_lin_t *pl, const rp_real xi[NP],
+                               const rp_real toff[NO], camcache_t *cc, rp_real uv[2],
+                               rp_real *H)
+{
+    const int D = y->D;
+    if (D == NP) {
+        return rp_rig_project(rig, o->cam, pl, o->M, uv, H, NULL);
+    }
+    const rp_real delta = o->dt + toff[o->cam];
+    if (!cc->valid || cc->cam != o->cam || cc->delta != delta) {
+        rp_real d[NP], pc[NP];
+        for (int i = 0; i < NP; ++i) {
+            d[i] = delta * xi[i];
+        }
+        cc->valid = 0;
+        if (rp_pose_plus(pl->p, d, pc) != RP_OK || rp_pose_lin_set(&cc->pl, pc) != RP_OK) {
+            return RP_E_NAN;
+        }
+        cc->valid = 1;
+        cc->cam = o->cam;
+        cc->delta = delta;
+    }
+    rp_real J[12];
+    const rp_status_t st = rp_rig_project(rig, o->cam, &cc->pl, o->M, uv, J, NULL);
+    if (st != RP_OK) {
+        return st;
+    }
+    const int oi = y->off_of[o->cam];
+    for (int a = 0; a < 2; ++a) {
+        rp_real *h = H + a * D, jx = RP_C(0.0);
+        for (int i = 0; i < NP; ++i) {
+            h[i] = J[a * NP + i];
+            h[NP + i] = delta * J[a * NP + i];
+            jx += J[a * NP + i] * xi[i];
+        }
+        for (int i = N; i < D; ++i) {
+            h[i] = RP_C(0.0);
+        }
+        if (oi >= 0) {
+            h[oi] = jx;
+        }
+    }
+    return RP_OK;
+}
+
+/* A pose-only update (D = 6): the rate follows by conditioning on the pose posterior (see the
+ * top of this file), e1 from e0 with pose p. */
+static rp_status_t condition_rate(const rp_ekf_t *e0, const rp_real L[36], const rp_real Cpost[36],
+                                  const rp_real dp[NP], const rp_real p[NP], rp_ekf_t *e1)
+{
+    const rp_real *x0 = e0->x, *P0 = e0->P;
+    rp_real Ppv[36], M[36], Dm[36], DM[36];
     for (int i = 0; i < NP; ++i) {
         for (int j = 0; j < NP; ++j) {
             Ppv[i * NP + j] = P0[i * N + NP + j];
-            Dm[i * NP + j] = Ppp[i * NP + j] - Cpost[i * NP + j];
+            Dm[i * NP + j] = P0[i * N + j] - Cpost[i * NP + j];
         }
     }
-    rp_status_t st = rp_la_chol_solve(&RP_MAT(6, 6, L), &RP_MAT(6, 6, Ppv), &RP_MAT(6, 6, M));
+    rp_status_t st = rp_la_chol_solve(&RP_MAT(6, 6, (rp_real *)L), &RP_MAT(6, 6, Ppv),
+                                      &RP_MAT(6, 6, M));
     if (st == RP_OK) {
         st = rp_la_mul(&RP_MAT(6, 6, Dm), &RP_MAT(6, 6, M), &RP_MAT(6, 6, DM));
     }
     if (st != RP_OK) {
-        reset_covariance(ekf, P0);
-        info->cov_reset = 1;
-        return RP_E_DIVERGED;
+        return st;
     }
-    memcpy(x_new, x0, sizeof(x_new));
-    memcpy(P_new, P0, sizeof(P_new));
+    rp_real *x_new = e1->x, *P_new = e1->P;
     for (int i = 0; i < NP; ++i) {
         x_new[i] = p[i];
         rp_real acc = RP_C(0.0);
@@ -474,15 +537,196 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
         }
     }
     symmetrize(P_new, N);
-    rp_real Lfull[N * N];
-    if (!rp_all_finite(x_new, N) ||
-        rp_la_chol(&RP_MAT(N, N, P_new), &RP_MAT(N, N, Lfull)) != RP_OK) {
-        reset_covariance(ekf, P0);
+    return RP_OK;
+}
+
+rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
+                          uint8_t *used, rp_ekf_info_t *info)
+{
+    rp_ekf_info_t dummy;
+    if (!info) {
+        info = &dummy;
+    }
+    memset(info, 0, sizeof(*info));
+    if (!ekf || !rig || (n > 0 && !obs)) {
+        return RP_E_ARG;
+    }
+    if (used) {
+        memset(used, 0, n);
+    }
+    const rp_ekf_params_t *prm = &ekf->prm;
+    const rp_real s2 = prm->sigma_px * prm->sigma_px;
+
+    const rp_ekf_t e0 = *ekf; /* the prior: state, covariance, offsets */
+    const rp_real *x0 = e0.x, *P0 = e0.P;
+    yblock_t y;
+    yblock_set(&y, &e0, obs, n);
+    const int D = y.D;
+    rp_real Pyy[DMAX * DMAX], L[DMAX * DMAX], Cpost[DMAX * DMAX];
+    yblock_prior(&y, &e0, Pyy);
+    if (!rp_all_finite(P0, N * N) || !rp_all_finite(x0, N) ||
+        !rp_all_finite(e0.Pxo, N * NO) || !rp_all_finite(e0.Poo, NO * NO) ||
+        !rp_all_finite(e0.toff, NO) ||
+        rp_la_chol(&RP_MAT(D, D, Pyy), &RP_MAT(D, D, L)) != RP_OK) {
+        reset_covariance(ekf, &e0);
         info->cov_reset = 1;
         return RP_E_DIVERGED;
     }
-    memcpy(ekf->x, x_new, sizeof(x_new));
-    memcpy(ekf->P, P_new, sizeof(P_new));
+
+    rp_real p[NP], xi[NP], toff[NO]; /* current iterate (yblock_iterate) */
+    rp_real dy[DMAX] = {0};
+    memcpy(p, x0, sizeof(p));
+    memcpy(xi, x0 + NP, sizeof(xi));
+    memcpy(toff, e0.toff, sizeof(toff));
+    memcpy(Cpost, Pyy, sizeof(rp_real) * (size_t)(D * D)); /* covariance used by the gate */
+    uint16_t n_used = 0, n_gated = 0, n_bad = 0, n_outside = 0;
+    rp_real sq_sum = RP_C(0.0);
+
+    for (uint8_t it = 0; it < prm->iterations; ++it) {
+        rp_pose_lin_t pl;
+        if (rp_pose_lin_set(&pl, p) != RP_OK) {
+            reset_covariance(ekf, &e0);
+            info->cov_reset = 1;
+            return RP_E_DIVERGED;
+        }
+        camcache_t cc = {0};
+        rp_real A[DMAX * DMAX] = {0}, b[DMAX] = {0};
+        /* Gate against the current estimate and covariance. If that rejects more features
+         * than it keeps, the estimate is still poor (a bad prior, or an iteration not yet
+         * converged: residuals are linearisation error, not noise), so this iteration keeps
+         * them all and a later one gates. */
+        int gate = prm->gate_chi2 > RP_C(0.0);
+        for (int pass = 0; pass < 2; ++pass) {
+            memset(A, 0, sizeof(A));
+            memset(b, 0, sizeof(b));
+            n_used = n_gated = n_bad = 0;
+            sq_sum = RP_C(0.0);
+            for (uint32_t k = 0; k < n; ++k) {
+                const rp_obs_t *o = &obs[k];
+                rp_real uv[2], H[2 * DMAX];
+                if (!rp_finite(o->w) || o->w <= RP_C(0.0) || !rp_all_finite(o->uv, 2) ||
+                    !rp_finite(o->dt) || o->cam >= rig->n_cams ||
+                    obs_predict(&y, rig, o, &pl, xi, toff, &cc, uv, H) != RP_OK) {
+                    n_bad++;
+                    if (used) {
+                        used[k] = 0;
+                    }
+                    continue;
+                }
+                rp_real r[2] = {o->uv[0] - uv[0], o->uv[1] - uv[1]};
+                if (gate) {
+                    /* innovation of this feature against the current estimate */
+                    rp_real d2 = maha_d(H, Cpost, D, s2 / o->w, r);
+                    if (d2 > prm->gate_chi2) {
+                        n_gated++;
+                        if (used) {
+                            used[k] = 0;
+                        }
+                        continue;
+                    }
+                }
+                if (used) {
+                    used[k] = 1;
+                }
+                n_used++;
+                sq_sum += r[0] * r[0] + r[1] * r[1];
+                const rp_real wk = o->w / s2;
+                rp_real rr[2];
+                for (int a = 0; a < 2; ++a) {
+                    rp_real jd = RP_C(0.0);
+                    for (int j = 0; j < D; ++j) {
+                        jd += H[a * D + j] * dy[j];
+                    }
+                    rr[a] = r[a] + jd; /* r + H (y_k - y0) */
+                }
+                for (int i = 0; i < D; ++i) {
+                    const rp_real j0 = H[i] * wk, j1 = H[D + i] * wk;
+                    b[i] += j0 * rr[0] + j1 * rr[1];
+                    for (int j = 0; j <= i; ++j) {
+                        A[i * D + j] += j0 * H[j] + j1 * H[D + j];
+                    }
+                }
+            }
+            if (pass == 0) {
+                n_outside = n_gated;
+            }
+            if (gate && pass == 0 && n_gated > n_used) {
+                gate = 0;
+                continue;
+            }
+            break;
+        }
+        if (n_used < prm->min_features) {
+            /* Not enough to update: the state stays as predicted. */
+            info->n_used = 0;
+            info->n_gated = n_gated;
+            info->n_bad = n_bad;
+            info->n_outside = n_outside;
+            if (used) {
+                memset(used, 0, n);
+            }
+            *ekf = e0;
+            return RP_E_TOO_FEW;
+        }
+        for (int i = 0; i < D; ++i) {
+            for (int j = i + 1; j < D; ++j) {
+                A[i * D + j] = A[j * D + i];
+            }
+        }
+        if (posterior(L, A, D, Cpost) != RP_OK) {
+            reset_covariance(ekf, &e0);
+            info->cov_reset = 1;
+            return RP_E_DIVERGED;
+        }
+        for (int i = 0; i < D; ++i) {
+            rp_real acc = RP_C(0.0);
+            for (int j = 0; j < D; ++j) {
+                acc += Cpost[i * D + j] * b[j];
+            }
+            dy[i] = acc;
+        }
+        if (yblock_iterate(&y, &e0, dy, p, xi, toff) != RP_OK) {
+            reset_covariance(ekf, &e0);
+            info->cov_reset = 1;
+            return RP_E_DIVERGED;
+        }
+    }
+
+    rp_ekf_t e1 = e0;
+    if (D == NP) {
+        if (condition_rate(&e0, L, Cpost, dy, p, &e1) != RP_OK) {
+            reset_covariance(ekf, &e0);
+            info->cov_reset = 1;
+            return RP_E_DIVERGED;
+        }
+    } else {
+        /* Timed: y is the whole state (pose, rate, offset states): its posterior is the
+         * state's. */
+        memcpy(e1.x, p, sizeof(p));
+        memcpy(e1.x + NP, xi, sizeof(xi));
+        memcpy(e1.toff, toff, sizeof(toff));
+        for (int i = 0; i < N; ++i) {
+            for (int j = 0; j < N; ++j) {
+                e1.P[i * N + j] = Cpost[i * D + j];
+            }
+            for (int a = 0; a < y.n_off; ++a) {
+                e1.Pxo[i * NO + y.off_cam[a]] = Cpost[i * D + N + a];
+            }
+        }
+        for (int a = 0; a < y.n_off; ++a) {
+            for (int c = 0; c < y.n_off; ++c) {
+                e1.Poo[y.off_cam[a] * NO + y.off_cam[c]] = Cpost[(N + a) * D + N + c];
+            }
+        }
+    }
+    rp_real Lfull[N * N];
+    if (!rp_all_finite(e1.x, N) || !rp_all_finite(e1.toff, NO) ||
+        rp_la_chol(&RP_MAT(N, N, e1.P), &RP_MAT(N, N, Lfull)) != RP_OK) {
+        reset_covariance(ekf, &e0);
+        info->cov_reset = 1;
+        return RP_E_DIVERGED;
+    }
+    *ekf = e1;
     ekf->t_unobs = RP_C(0.0);
     ekf->held = 0;
     info->n_used = n_used;
