@@ -212,6 +212,29 @@ static void test_gc_metric_scale_sigma(void **state)
     assert_near(g_cfg.pipe.gc.mscale_sigma, 0.3, RP_TOL_TIGHT);
 }
 
+/* cameras[i].time_offset_s is every estimator's start offset of camera i;
+ * estimator.estimate_time_offsets makes them states (rp_vo_ekf_offsets). */
+static void test_time_offsets(void **state)
+{
+    (void)state;
+    assert_int_equal(parse(edited(20, "    angles: [0, 0, 0]\n    time_offset_s: -0.025")),
+                     RP_CFG_OK);
+    assert_near(g_cfg.cam_time_offset_s[1], -0.025, 0.0);
+    assert_near(g_cfg.pipe.stereo.ekf.toff0_s[1], -0.025, RP_TOL_TIGHT);
+    assert_near(g_cfg.pipe.gc.ekf.toff0_s[1], -0.025, RP_TOL_TIGHT);
+    assert_near(g_cfg.pipe.stereo.ekf.toff0_s[0], 0.0, 0.0);
+    assert_int_equal(g_cfg.pipe.stereo.ekf.toff_estimate, 0);
+    assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  estimate_time_offsets: true\n"
+                                      "  time_offset_sigma_s: 0.05")),
+                     RP_CFG_OK);
+    assert_int_equal(g_cfg.pipe.stereo.ekf.toff_estimate, 1);
+    assert_near(g_cfg.pipe.stereo.ekf.toff_sigma_s, 0.05, RP_TOL_TIGHT);
+    assert_int_equal(parse(edited(20, "    angles: [0, 0, 0]\n    time_offset_s: 2")),
+                     RP_CFG_E_RANGE);
+    assert_int_equal(parse(edited(23, "  pairs: [[left, right]]\n  time_offset_sigma_s: 0")),
+                     RP_CFG_E_RANGE);
+}
+
 /* `angles` is the paper's R = Rz(gamma) Ry(beta) Rx(alpha). */
 static void test_angles_match_the_rotation_module(void **state)
 {
@@ -829,6 +852,9 @@ static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
     else if (IS("iterations")) v[0] = e->iterations;
     else if (IS("min_features")) v[0] = e->min_features;
     else if (IS("max_predict_s")) v[0] = (double)e->max_predict_s;
+    else if (IS("estimate_time_offsets")) v[0] = e->toff_estimate;
+    else if (IS("time_offset_sigma_s")) v[0] = (double)e->toff_sigma_s;
+    else if (IS("time_offset_q")) v[0] = (double)e->toff_q;
     else if (IS("min_tracked")) {
         v[0] = st ? p->stereo.min_tracked : gc ? p->gc.min_tracked : p->mono.min_tracked;
     } else if (IS("default_dt_s")) {
@@ -1016,7 +1042,7 @@ static void test_readme_lists_the_core_defaults(void **state)
     printf("config/README.md: %u estimator and %u tracker defaults match the core's\n",
            est_rows, trk_rows);
     /* every setting the parser knows is listed (rp_config.c's keys but method, pairs, cams) */
-    assert_int_equal(est_rows, 21);
+    assert_int_equal(est_rows, 24);
     assert_int_equal(trk_rows, 7);
 }
 
@@ -1029,6 +1055,7 @@ int main(void)
         cmocka_unit_test(test_tracker_reset_share),
         cmocka_unit_test(test_sim_motion_and_instance),
         cmocka_unit_test(test_gc_metric_scale_sigma),
+        cmocka_unit_test(test_time_offsets),
         cmocka_unit_test(test_each_bad_file_names_line_and_key),
         cmocka_unit_test(test_whole_file_errors),
         cmocka_unit_test(test_hostile_files),

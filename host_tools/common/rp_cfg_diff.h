@@ -31,10 +31,12 @@
 #define RP_CD_RC 5     /* rc */
 
 /* X(field, use, kind): kind R rp_real, U unsigned integer, S signed integer, A uint8_t array,
- * L the layout. */
+ * V rp_real array, L the layout. */
 #define RP_CD_EKF_FIELDS(X, e, use)                                                               \
     X(e.sigma_px, use, R) X(e.q_trans, use, R) X(e.q_rot, use, R) X(e.gate_chi2, use, R)         \
-    X(e.iterations, use, U) X(e.min_features, use, U) X(e.max_predict_s, use, R)
+    X(e.iterations, use, U) X(e.min_features, use, U) X(e.max_predict_s, use, R)               \
+    X(e.toff0_s, use, V) X(e.toff_estimate, use, U) X(e.toff_sigma_s, use, R)                    \
+    X(e.toff_q, use, R)
 #define RP_PIPE_CFG_FIELDS(X)                                                                     \
     X(layout, RP_CD_ALL, L)                                                                       \
     X(track.cam, RP_CD_ALL, U) X(track.levels, RP_CD_ALL, U) X(track.win, RP_CD_ALL, U)          \
@@ -133,6 +135,18 @@ static inline void rp_cd_fmt_A(char *s, size_t cap, const void *p, size_t size)
     size_t n = 0;
     for (size_t i = 0; i < size && n + 5 < cap; ++i) {
         n += (size_t)snprintf(s + n, cap - n, "%s%u", i ? "," : "[", (unsigned)a[i]);
+    }
+    snprintf(s + n, cap - n, "]");
+}
+
+static inline void rp_cd_fmt_V(char *s, size_t cap, const void *p, size_t size)
+{
+    const unsigned char *a = (const unsigned char *)p;
+    size_t n = 0;
+    for (size_t i = 0; i + sizeof(rp_real) <= size && n + 16 < cap; i += sizeof(rp_real)) {
+        rp_real v;
+        memcpy(&v, a + i, sizeof v);
+        n += (size_t)snprintf(s + n, cap - n, "%s%g", i ? "," : "[", (double)v);
     }
     snprintf(s + n, cap - n, "]");
 }

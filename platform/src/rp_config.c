@@ -447,7 +447,7 @@ static int parse_camera(ctx_t *c, const yaml_node_t *m, unsigned i, rp_config_t 
 {
     static const char *const known[] = {"name",     "device",   "width",    "height",
                                         "fps",      "intrinsics", "distortion", "position",
-                                        "rotation", "angles",   NULL};
+                                        "rotation", "angles",   "time_offset_s", NULL};
     char path[KEY_MAX], kp[KEY_MAX];
     snprintf(path, sizeof path, "cameras[%u]", i);
     if (m->type != YAML_MAPPING_NODE) {
@@ -470,7 +470,8 @@ static int parse_camera(ctx_t *c, const yaml_node_t *m, unsigned i, rp_config_t 
         get_nums(c, m, path, "distortion", 0, 5, dist, &present) ||
         get_nums(c, m, path, "position", 1, 3, pos, &present) ||
         get_nums(c, m, path, "rotation", 0, 9, rot, &have_rot) ||
-        get_nums(c, m, path, "angles", 0, 3, abg, &have_abg)) {
+        get_nums(c, m, path, "angles", 0, 3, abg, &have_abg) ||
+        get_num(c, m, path, "time_offset_s", 0, 0.0, -1.0, 0, 1.0, &cfg->cam_time_offset_s[i])) {
         return -1;
     }
     for (unsigned j = 0; j < i; ++j) {
@@ -837,6 +838,9 @@ static const est_key_t est_keys[] = {
      {F(gc.init_depth_sigma_m), F(mono.init_depth_sigma_m)}},
     {"init_on_sphere", K_BOOL, 0, 1, 0, 1, {F(gc.init_on_sphere)}},
     {"metric_scale_sigma", K_REAL, 0.0, 10.0, 0, 1, {F(gc.mscale_sigma)}},
+    {"estimate_time_offsets", K_BOOL, 0, 1, 0, ALL3(ekf.toff_estimate)},
+    {"time_offset_sigma_s", K_REAL, 0.0, 1.0, 1, ALL3(ekf.toff_sigma_s)},
+    {"time_offset_q", K_REAL, 0.0, 1.0, 0, ALL3(ekf.toff_q)},
 };
 #undef ALL3
 #undef F
@@ -878,7 +882,8 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         "max_epipolar_px", "min_depth_m", "max_depth_m", "max_reproj_px",   "refine_structure",
         "ransac",      "one_point",    "quarantine",
         "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s",
-        "metric_scale_sigma", "max_predict_s", NULL};
+        "metric_scale_sigma", "max_predict_s", "estimate_time_offsets", "time_offset_sigma_s",
+        "time_offset_q", NULL};
     const char *P = "estimator";
     yaml_node_t *m;
     char method[16];
@@ -904,6 +909,11 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         if (set_est_key(c, m, P, &est_keys[k], pc) != 0) {
             return -1;
         }
+    }
+    /* each camera's configured clock offset (cameras[i].time_offset_s) */
+    for (unsigned i = 0; i < RP_MAX_CAMS; ++i) {
+        const rp_real o = (rp_real)cfg->cam_time_offset_s[i];
+        pc->stereo.ekf.toff0_s[i] = pc->gc.ekf.toff0_s[i] = pc->mono.ekf.toff0_s[i] = o;
     }
     if (pc->stereo.min_depth_m >= pc->stereo.max_depth_m) {
         const yaml_node_t *at = map_get(c, m, "max_depth_m");

@@ -63,6 +63,14 @@ typedef struct {
     rp_real max_predict_s; /* the constant-velocity prediction runs at most this long without
                             * a successful update (s, > 0); after it the pose is held (see
                             * rp_ekf_predict) */
+    /* Clock offsets (top of this file; config/README.md "Time offsets"): */
+    rp_real toff0_s[RP_MAX_CAMS]; /* each camera's configured offset (capture = stamp + it), s:
+                                   * the filter's offsets after rp_ekf_init */
+    uint8_t toff_estimate; /* 1: layouts make the offsets of their cameras but the first states
+                            * (rp_vo_ekf_offsets) */
+    rp_real toff_sigma_s;  /* start sigma of an offset state, s (> 0) */
+    rp_real toff_q;        /* random-walk density of an offset state, s^2/s (>= 0): the
+                            * clocks' drift */
 } rp_ekf_params_t;
 
 /* Defaults for 0.5 px noise and a hand-held / robot motion at ~30 Hz. */
@@ -98,8 +106,9 @@ typedef struct {
     uint8_t cov_reset; /* 1 if the covariance had to be reset (numerical fault) */
 } rp_ekf_info_t;
 
-/* Start the filter at x0 with diagonal covariance P0diag. RP_E_ARG (bad params: sigma_px <= 0,
- * iterations 0, negative noise), RP_E_NAN. */
+/* Start the filter at x0 with diagonal covariance P0diag; the clock offsets at prm->toff0_s,
+ * none a state. RP_E_ARG (bad params: sigma_px <= 0, iterations 0, negative noise, offset
+ * sigma <= 0 or q < 0), RP_E_NAN. */
 rp_status_t rp_ekf_init(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real x0[RP_EKF_N],
                         const rp_real P0diag[RP_EKF_N]);
 

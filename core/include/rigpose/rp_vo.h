@@ -62,6 +62,15 @@ rp_status_t rp_vo_refind(rp_ransac_t *rs, const rp_rig_t *rig, const rp_ekf_t *p
 /* x = 0, P = I under prm (the filter before the first frame set). rp_ekf_init's errors. */
 rp_status_t rp_vo_ekf_idle(rp_ekf_t *ekf, const rp_ekf_params_t *prm);
 
+/* The clock offsets of the layout's cameras (cam_mask, bit k: rig camera k): with
+ * ekf->prm.toff_estimate, the offsets of all of them but the lowest (the reference) become
+ * states (rp_ekf_toff_set from prm's toff0_s, toff_sigma_s, toff_q); else none is. Called on the
+ * idle filter at a layout's init: the two priors below carry the offsets on. RP_E_ARG. */
+rp_status_t rp_vo_ekf_offsets(rp_ekf_t *ekf, uint8_t cam_mask);
+
+/* The two priors below restart *ekf, which must be a started filter (the idle one at least):
+ * its clock offsets, their states and covariance carry over (rp_ekf_toff_carry). */
+
 /* The prior at the first frame set: pose zero with variance RP_VO_ORIGIN_VAR, velocity zero with
  * the start sigmas. rp_ekf_init's errors. */
 rp_status_t rp_vo_ekf_at_origin(rp_ekf_t *ekf, const rp_ekf_params_t *prm);

@@ -39,17 +39,26 @@ rp_ekf_params_t rp_ekf_default_params(void)
     p.iterations = 3;
     p.min_features = 6;
     p.max_predict_s = RP_C(1.0);
+    for (int k = 0; k < NO; ++k) {
+        p.toff0_s[k] = RP_C(0.0);
+    }
+    p.toff_estimate = 0;
+    p.toff_sigma_s = RP_C(0.02);
+    p.toff_q = RP_C(1e-8);
     return p;
 }
 
 static rp_status_t check_params(const rp_ekf_params_t *prm)
 {
     if (!rp_finite(prm->sigma_px) || !rp_finite(prm->q_trans) || !rp_finite(prm->q_rot) ||
-        !rp_finite(prm->gate_chi2) || !rp_finite(prm->max_predict_s)) {
+        !rp_finite(prm->gate_chi2) || !rp_finite(prm->max_predict_s) ||
+        !rp_all_finite(prm->toff0_s, NO) || !rp_finite(prm->toff_sigma_s) ||
+        !rp_finite(prm->toff_q)) {
         return RP_E_NAN;
     }
     if (prm->sigma_px <= RP_C(0.0) || prm->q_trans < RP_C(0.0) || prm->q_rot < RP_C(0.0) ||
-        prm->iterations == 0 || prm->min_features < 3 || !(prm->max_predict_s > RP_C(0.0))) {
+        prm->iterations == 0 || prm->min_features < 3 || !(prm->max_predict_s > RP_C(0.0)) ||
+        !(prm->toff_sigma_s > RP_C(0.0)) || prm->toff_q < RP_C(0.0)) {
         return RP_E_ARG;
     }
     return RP_OK;
@@ -84,6 +93,8 @@ rp_status_t rp_ekf_init(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real
     for (int i = 0; i < N; ++i) {
         ekf->P[i * N + i] = d_copy[i];
     }
+    memcpy(ekf->toff, prm_copy.toff0_s, sizeof(ekf->toff));
+    ekf->q_toff = prm_copy.toff_q;
     return RP_OK;
 }
 

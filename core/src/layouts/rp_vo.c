@@ -41,6 +41,29 @@ static rp_real start_var(int i)
                  : RP_VO_START_SIGMA_W * RP_VO_START_SIGMA_W;
 }
 
+rp_status_t rp_vo_ekf_offsets(rp_ekf_t *ekf, uint8_t cam_mask)
+{
+    if (!ekf) {
+        return RP_E_ARG;
+    }
+    /* all of the layout's cameras but the lowest */
+    const uint8_t states = ekf->prm.toff_estimate ? (uint8_t)(cam_mask & (cam_mask - 1u)) : 0;
+    rp_real sig[RP_MAX_CAMS];
+    for (int k = 0; k < RP_MAX_CAMS; ++k) {
+        sig[k] = ekf->prm.toff_sigma_s;
+    }
+    return rp_ekf_toff_set(ekf, states, ekf->prm.toff0_s, sig, ekf->prm.toff_q);
+}
+
+/* rp_ekf_init on a started filter, its clock offsets carried over. */
+static rp_status_t restart(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real x0[RP_EKF_N],
+                           const rp_real P0diag[RP_EKF_N])
+{
+    const rp_ekf_t old = *ekf;
+    const rp_status_t st = rp_ekf_init(ekf, prm, x0, P0diag);
+    return st == RP_OK ? rp_ekf_toff_carry(ekf, &old) : st;
+}
+
 rp_status_t rp_vo_ekf_at_origin(rp_ekf_t *ekf, const rp_ekf_params_t *prm)
 {
     rp_real x0[RP_EKF_N] = {0}, P0[RP_EKF_N];
@@ -48,7 +71,7 @@ rp_status_t rp_vo_ekf_at_origin(rp_ekf_t *ekf, const rp_ekf_params_t *prm)
         P0[i] = RP_VO_ORIGIN_VAR;
         P0[6 + i] = start_var(i);
     }
-    return rp_ekf_init(ekf, prm, x0, P0);
+    return ekf ? restart(ekf, prm, x0, P0) : RP_E_ARG;
 }
 
 rp_status_t rp_vo_ekf_from_pose(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const rp_real p[6],
@@ -66,7 +89,7 @@ rp_status_t rp_vo_ekf_from_pose(rp_ekf_t *ekf, const rp_ekf_params_t *prm, const
         P0diag[i] = cov[i * 6 + i] * s2;
         P0diag[6 + i] = P0diag[i] / (dt * dt) + start_var(i);
     }
-    const rp_status_t st = rp_ekf_init(ekf, prm, x, P0diag);
+    const rp_status_t st = restart(ekf, prm, x, P0diag);
     if (st != RP_OK) {
         return st;
     }

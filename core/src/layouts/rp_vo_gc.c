@@ -110,6 +110,14 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
     vo->cfg = *cfg;
     rp_vo_gc_set_mu(vo, RP_C(1.0));
     vo->ekf = idle;
+    uint8_t cams = 0;
+    for (uint8_t k = 0; k < cfg->n_cams; ++k) {
+        cams = (uint8_t)(cams | (1u << cfg->cams[k]));
+    }
+    st = rp_vo_ekf_offsets(&vo->ekf, cams);
+    if (st != RP_OK) {
+        return st;
+    }
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);

@@ -48,6 +48,14 @@ rp_status_t rp_vo_mono_init(rp_vo_mono_t *vo, const rp_rig_t *rig, const rp_vo_m
     vo->own.cam[0].R[0] = vo->own.cam[0].R[4] = vo->own.cam[0].R[8] = RP_C(1.0);
     vo->own.cam[0].cam = rig->cam[cfg->cam].cam;
     vo->ekf = idle;
+    /* one camera: its offset is a known shift of its stamps, never a state (nothing to hold it
+     * to); the filter's rig has it as camera 0 */
+    rp_real off[RP_MAX_CAMS] = {0};
+    off[0] = cfg->ekf.toff0_s[cfg->cam];
+    st = rp_ekf_toff_set(&vo->ekf, 0, off, NULL, RP_C(0.0));
+    if (st != RP_OK) {
+        return st;
+    }
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);

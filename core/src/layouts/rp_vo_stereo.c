@@ -72,6 +72,14 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
         }
     }
     vo->ekf = idle;
+    uint8_t cams = 0;
+    for (uint8_t k = 0; k < cfg->n_pairs; ++k) {
+        cams = (uint8_t)(cams | (1u << cfg->pair_a[k]) | (1u << cfg->pair_b[k]));
+    }
+    st = rp_vo_ekf_offsets(&vo->ekf, cams);
+    if (st != RP_OK) {
+        return st;
+    }
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     /* ignored: only NULL arguments fail */

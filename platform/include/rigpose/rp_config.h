@@ -76,6 +76,8 @@ typedef struct {
     char cam_name[RP_MAX_CAMS][RP_CFG_NAME_MAX];
     rp_hal_cfg_t hal;                      /* kind, cameras, timeouts, sim seed/frames */
     rp_cfg_sim_t sim;
+    double cam_time_offset_s[RP_MAX_CAMS]; /* cameras[i].time_offset_s: true capture time =
+                                            * stamp + this, s (rp_ekf.h); also in pipe */
     rp_pipe_cfg_t pipe;                    /* the estimator: rp_pipe_default_cfg of the layout
                                             * estimator.method names, with the cameras and the
                                             * keys the file gives over it (estimator, tracker) */
