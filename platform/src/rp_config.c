@@ -829,6 +829,7 @@ static const est_key_t est_keys[] = {
     {"min_depth_m", K_REAL, 0.0, 1e6, 1, 1, {F(stereo.min_depth_m)}},
     {"max_depth_m", K_REAL, 0.0, 1e6, 1, 1, {F(stereo.max_depth_m)}},
     {"max_reproj_px", K_REAL, 0.0, 100.0, 1, 1, {F(stereo.max_reproj_px)}},
+    {"max_pair_skew_s", K_REAL, 0.0, 1.0, 0, 1, {F(stereo.max_pair_skew_s)}},
     {"refine_structure", K_BOOL, 0, 1, 0, 1, {F(stereo.refine_structure)}},
     {"ransac", K_BOOL, 0, 1, 0, ALL3(ransac)},
     {"one_point", K_BOOL, 0, 1, 0, ALL3(one_point)},
@@ -883,7 +884,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         "ransac",      "one_point",    "quarantine",
         "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s",
         "metric_scale_sigma", "max_predict_s", "estimate_time_offsets", "time_offset_sigma_s",
-        "time_offset_q", NULL};
+        "time_offset_q", "max_pair_skew_s", NULL};
     const char *P = "estimator";
     yaml_node_t *m;
     char method[16];

@@ -128,6 +128,41 @@ static void test_camera_pair_vanishing_keeps_tracking_with_the_other(void **stat
     simfx_free(fx);
 }
 
+/* The front pair's right camera stamped 5 ms (beyond max_pair_skew_s) / 0.5 ms (within) after
+ * the set in every frame set (the sim captured it with the others). */
+static void front_right_5ms(rp_frameset_t *fs, uint32_t j)
+{
+    (void)j;
+    fs->cam_dt_us[RP_SIM_CAM1B] = 5000;
+}
+
+static void front_right_half_ms(rp_frameset_t *fs, uint32_t j)
+{
+    (void)j;
+    fs->cam_dt_us[RP_SIM_CAM1B] = 500;
+}
+
+/* A pair whose images are farther apart in time than max_pair_skew_s makes no landmarks and
+ * says so (UNSYNCED); the other pair carries the pose. Within the limit nothing is flagged. */
+static void test_skewed_pair_makes_no_landmarks(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.5, 30, 0);
+    rp_vo_stereo_cfg_t cfg = stereo_cfg(2, 0.5);
+    double err[6];
+    uint32_t flags;
+    assert_int_equal(run_sequence(fx, &cfg, 30, front_right_5ms, err, &flags), 0);
+    assert_true(flags & RP_EST_UNSYNCED);
+    assert_int_equal(fx->vo.lm.map.n_group[0], 0); /* the front pair (group 0) holds none */
+    assert_true(fx->vo.lm.map.n_group[1] > 0);
+    for (int i = 0; i < 3; ++i) assert_true(err[i] < 5e-3);
+    assert_int_equal(run_sequence(fx, &cfg, 30, front_right_half_ms, err, &flags), 0);
+    assert_false(flags & RP_EST_UNSYNCED);
+    cfg.max_pair_skew_s = RP_C(-1.0);
+    assert_status(rp_vo_stereo_init(&fx->vo, &fx->sim.sr.rig, &cfg), RP_E_ARG);
+    simfx_free(fx);
+}
+
 /* Every camera dark for frames 10-12 (simfx_all_dark_10_12): the estimator reports LOST with
  * the prediction. Frame 13 has nothing to backtrack to (frame 12 was dark), so it is lost too
  * but keeps its features; frame 14 re-initialises from frame 13 and tracks again. */
@@ -523,6 +558,7 @@ int main(void)
         cmocka_unit_test(test_noisy_stereo4_and_stereo2_beat_the_paper_by_five),
         cmocka_unit_test(test_reinitialisation_backtracks_and_keeps_accuracy),
         cmocka_unit_test(test_camera_pair_vanishing_keeps_tracking_with_the_other),
+        cmocka_unit_test(test_skewed_pair_makes_no_landmarks),
         cmocka_unit_test(test_all_cameras_dark_reports_lost_then_recovers),
         cmocka_unit_test(test_nan_pixels_are_skipped),
         cmocka_unit_test(test_prediction_off_along_one_pairs_blind_direction_is_recovered),

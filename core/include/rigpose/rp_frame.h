@@ -60,9 +60,12 @@ enum {
     RP_EST_GATED        = 1u << 5, /* some measurements rejected as outliers (Mahalanobis gate) */
     RP_EST_COV_RESET    = 1u << 6, /* numerical fault: the covariance was reset */
     RP_EST_SCALE_WEAK   = 1u << 7, /* metric scale poorly determined (non-overlapping layouts) */
-    RP_EST_HELD         = 1u << 8  /* no update for longer than the filter's max_predict_s: the
+    RP_EST_HELD         = 1u << 8, /* no update for longer than the filter's max_predict_s: the
                                     * pose is held, not extrapolated, its covariance growing
                                     * (rp_ekf_predict); always with LOST */
+    RP_EST_UNSYNCED     = 1u << 9  /* a stereo pair's two images were farther apart in time than
+                                    * the layout allows (max_pair_skew_s): no new landmarks from
+                                    * it this time */
 };
 
 typedef struct {

@@ -60,6 +60,10 @@ typedef struct {
     rp_real max_depth_m;
     rp_real max_reproj_px;          /* reject a triangulation with a larger reprojection error */
     rp_real default_dt_s;           /* frame interval used when timestamps are missing, s */
+    rp_real max_pair_skew_s;        /* a pair whose two images were captured farther apart in
+                                     * time (stamps and clock offsets) makes no new landmarks
+                                     * that set (RP_EST_UNSYNCED), s: the matcher and the
+                                     * triangulation take the two as simultaneous */
     uint8_t refine_structure;       /* 1: a structure EKF per landmark refines its position with
                                      * every later observation (beyond the paper, which keeps the
                                      * first triangulation); 0: the paper's fixed structure */
@@ -92,6 +96,7 @@ typedef struct {
     uint32_t n_retried;                 /* updates redone because the gate rejected most of a
                                          * pair or of all (rp_vo_stereo.c, predict_update) */
     uint32_t n_refound;                 /* of those, poses re-found by rig RANSAC */
+    uint8_t skewed;                     /* this step: a pair refused (max_pair_skew_s) */
     rp_ransac_t rs;                     /* rig RANSAC's generator and scratch */
     rp_ekf1pt_t op;                     /* 1-point RANSAC's generator and scratch */
     uint8_t inl[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: RANSAC's inliers */

@@ -24,6 +24,7 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.max_depth_m = RP_C(100.0);
     c.max_reproj_px = RP_C(1.5);
     c.default_dt_s = RP_C(1.0) / RP_C(30.0);
+    c.max_pair_skew_s = RP_C(0.001); /* config/README.md, `max_pair_skew_s` */
     c.refine_structure = 1;
     c.ransac = 1;
     c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
@@ -51,6 +52,7 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
     if (cfg->n_pairs < 1 || cfg->n_pairs > RP_MAX_PAIRS || cfg->min_tracked < 6 ||
         !(cfg->max_epipolar_px > RP_C(0.0)) || !(cfg->min_depth_m > RP_C(0.0)) ||
         !(cfg->max_depth_m > cfg->min_depth_m) || !(cfg->max_reproj_px > RP_C(0.0)) ||
+        !(cfg->max_pair_skew_s >= RP_C(0.0)) || !rp_finite(cfg->max_pair_skew_s) ||
         !(cfg->default_dt_s > RP_C(0.0)) || cfg->ransac > 1 || cfg->one_point > 1) {
         return RP_E_ARG;
     }
@@ -142,8 +144,21 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
 {
     const rp_stereo_pair_t *sp = &vo->pair[k];
     const rp_vo_stereo_cfg_t *cfg = &vo->cfg;
+    /* each camera's capture time relative to the state's (rp_ekf.h): the pair's two images
+     * must be near-simultaneous; the points go into the world at camera a's pose then, from
+     * the filter's constant velocity */
+    const rp_real da = (rp_real)fs->cam_dt_us[sp->a] * RP_C(1e-6) + vo->ekf.toff[sp->a];
+    const rp_real db = (rp_real)fs->cam_dt_us[sp->b] * RP_C(1e-6) + vo->ekf.toff[sp->b];
+    if (!(rp_fabs(da - db) <= cfg->max_pair_skew_s)) {
+        vo->skewed = 1;
+        return 0;
+    }
+    rp_real d[6], pa[6];
+    for (int i = 0; i < 6; ++i) {
+        d[i] = da * vo->ekf.x[6 + i];
+    }
     rp_pose_lin_t pl;
-    if (rp_pose_lin_set(&pl, p) != RP_OK) {
+    if (rp_pose_plus(p, d, pa) != RP_OK || rp_pose_lin_set(&pl, pa) != RP_OK) {
         return 0;
     }
     uint16_t added = 0;
@@ -213,7 +228,7 @@ static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uin
 {
     /* ignored: only NULL arguments fail */
     (void)rp_vo_fill_estimate(&vo->ekf, RP_C(1.0), fs ? fs->utime : vo->prev_utime, vo->frame,
-                              flags, vo->lm.map.n, est);
+                              flags | (vo->skewed ? RP_EST_UNSYNCED : 0u), vo->lm.map.n, est);
 }
 
 /* ---- the step ---------------------------------------------------------------------------- */
@@ -248,6 +263,7 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
 {
     /* Step (1) at frame 0: the world is cam1's frame now, so the pose is exactly zero. */
     static const rp_real zero[6] = {0};
+    vo->skewed = 0;
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     uint16_t added = 0;
@@ -555,6 +571,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     if (vo->frame == 0) {
         return first_frame(vo, fs, est);
     }
+    vo->skewed = 0;
     uint32_t flags = 0;
 
     /* Which landmarks are still tracked; lost ones are dropped. */
