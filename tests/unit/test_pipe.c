@@ -228,6 +228,39 @@ static void test_ids_across_the_serial_wrap(void **state)
     assert_status(rp_track_set_next_serial(&pipe.trk[0], RP_TRACK_SERIAL_MASK + 1u), RP_E_ARG);
 }
 
+/* rp_pipe_time_offsets: the configured offsets, and with estimate_time_offsets the start sigma of
+ * the layout's cameras but the first (stereo4: its pairs' cameras; camK: none). */
+static void test_time_offsets_reported(void **state)
+{
+    (void)state;
+    rp_pipe_cfg_t cfg;
+    rp_real off[RP_MAX_CAMS], sig[RP_MAX_CAMS];
+    for (int est = 0; est < 2; ++est) {
+        assert_ok(rp_pipe_default_cfg(RP_PIPE_STEREO4, &cfg));
+        cfg.stereo.ekf.toff0_s[2] = RP_C(-0.025);
+        cfg.stereo.ekf.toff_estimate = (uint8_t)est;
+        assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+        assert_ok(rp_pipe_time_offsets(&pipe, off, sig));
+        assert_true(off[2] == RP_C(-0.025) && off[1] == RP_C(0.0));
+        assert_true(sig[0] == RP_C(0.0));
+        uint8_t in_pair[RP_MAX_CAMS] = {0};
+        for (uint8_t p = 0; p < cfg.stereo.n_pairs; ++p) {
+            in_pair[cfg.stereo.pair_a[p]] = in_pair[cfg.stereo.pair_b[p]] = 1;
+        }
+        for (int k = 1; k < NCAM; ++k) {
+            assert_true(sig[k] == (est && in_pair[k] ? cfg.stereo.ekf.toff_sigma_s : RP_C(0.0)));
+        }
+    }
+    assert_ok(rp_pipe_default_cfg(RP_PIPE_CAM2, &cfg));
+    cfg.mono.ekf.toff0_s[1] = RP_C(0.012);
+    cfg.mono.ekf.toff_estimate = 1;
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    assert_ok(rp_pipe_time_offsets(&pipe, off, sig));
+    assert_true(off[1] == RP_C(0.012) && sig[1] == RP_C(0.0));
+    assert_status(rp_pipe_time_offsets(NULL, off, sig), RP_E_ARG);
+    assert_status(rp_pipe_time_offsets(&pipe, NULL, sig), RP_E_ARG);
+}
+
 /* The first frame set: the right camera of each pair carries only ids of its left camera, each
  * on the epipolar line of its partner, and every left feature has its partner (the unmatched
  * ones are dropped). */
@@ -608,6 +641,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pairs_share_ids),
+        cmocka_unit_test(test_time_offsets_reported),
         cmocka_unit_test_setup(test_ids_across_the_serial_wrap, setup_frames),
         cmocka_unit_test(test_stereo4_tracks_motion),
         cmocka_unit_test(test_stereo2_tracks_motion),

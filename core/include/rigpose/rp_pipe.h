@@ -287,6 +287,14 @@ rp_status_t rp_pipe_frameset(const rp_pipe_t *pipe, const rp_frameset_t **fs);
 /* The report of the last step. RP_E_ARG: NULL or not initialised. */
 rp_status_t rp_pipe_info(const rp_pipe_t *pipe, const rp_pipe_info_t **info);
 
+/* Each rig camera's clock offset as the estimator holds it now (rp_ekf.h: capture = stamp +
+ * off_s[k], s) and its standard deviation sigma_s[k] (s; 0: not estimated, the configured
+ * value). gc and stereo estimate the offsets of their cameras but the first with
+ * estimator.estimate_time_offsets; camK and rc hold the configured ones. RP_E_ARG: NULL or not
+ * initialised. */
+rp_status_t rp_pipe_time_offsets(const rp_pipe_t *pipe, rp_real off_s[RP_MAX_CAMS],
+                                 rp_real sigma_s[RP_MAX_CAMS]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -612,3 +612,28 @@ rp_status_t rp_pipe_info(const rp_pipe_t *pipe, const rp_pipe_info_t **info)
     *info = &pipe->info;
     return RP_OK;
 }
+
+rp_status_t rp_pipe_time_offsets(const rp_pipe_t *pipe, rp_real off_s[RP_MAX_CAMS],
+                                 rp_real sigma_s[RP_MAX_CAMS])
+{
+    if (pipe == NULL || off_s == NULL || sigma_s == NULL || pipe->magic != RP_PIPE_MAGIC) {
+        return RP_E_ARG;
+    }
+    const rp_pipe_layout_t l = pipe->cfg.layout;
+    const rp_ekf_t *ekf = l == RP_PIPE_STEREO4 || l == RP_PIPE_STEREO2 ? &pipe->est.stereo.ekf
+                          : l == RP_PIPE_GC                            ? &pipe->est.gc.ekf
+                                                                       : NULL;
+    for (int k = 0; k < RP_MAX_CAMS; ++k) {
+        sigma_s[k] = RP_C(0.0);
+        if (ekf == NULL) {
+            off_s[k] = pipe->cfg.mono.ekf.toff0_s[k]; /* camK, rc: the configured offsets */
+            continue;
+        }
+        off_s[k] = ekf->toff[k];
+        if (ekf->toff_mask & (1u << k)) {
+            const rp_real v = ekf->Poo[k * RP_MAX_CAMS + k];
+            sigma_s[k] = v > RP_C(0.0) ? rp_sqrt(v) : RP_C(0.0);
+        }
+    }
+    return RP_OK;
+}
