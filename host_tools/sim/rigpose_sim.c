@@ -88,7 +88,20 @@ typedef struct {
     double noise_px; /* simulated pixel noise, px (the filters' measurement sigma) */
     unsigned ekf_iterations; /* Gauss-Newton iterations of the EKF update; 0 = the default */
     int no_refine;           /* 1: keep the first triangulation (the paper's structure) */
+    int est_offsets;         /* 1: the filters estimate the cameras' clock offsets */
+    const double *known_off_s; /* --known-offsets: the true offsets configured, else NULL */
 } method_opts_t;
+
+/* --estimate-offsets, --known-offsets on a layout's filter parameters. */
+static void offsets_opt(const method_opts_t *o, rp_ekf_params_t *e)
+{
+    if (o->est_offsets) {
+        e->toff_estimate = 1;
+    }
+    for (int k = 0; o->known_off_s != NULL && k < RP_SIM_NCAMS; ++k) {
+        e->toff0_s[k] = (rp_real)o->known_off_s[k];
+    }
+}
 
 /* One estimator as the simulator drives it. `state_size` bytes are allocated once per thread
  * (zeroed); `init` starts a run on that memory (the rig outlives the run); `step` processes one
@@ -115,6 +128,7 @@ static rp_vo_stereo_cfg_t stereo_cfg(const method_opts_t *o, int both_pairs)
     if (o->no_refine) {
         cfg.refine_structure = 0;
     }
+    offsets_opt(o, &cfg.ekf);
     return cfg;
 }
 
@@ -151,6 +165,7 @@ static rp_vo_gc_cfg_t gc_cfg(const method_opts_t *o)
     if (o->ekf_iterations) {
         cfg.ekf.iterations = (uint8_t)o->ekf_iterations;
     }
+    offsets_opt(o, &cfg.ekf);
     return cfg;
 }
 
@@ -286,12 +301,15 @@ typedef struct {
     int json;
     uint32_t ekf_iterations;
     int no_refine;
+    int est_offsets;
+    int known_offsets;
     int layout_study;         /* --layout-study given */
     const char *layout_file;  /* its FILE, or NULL for the built-in grid */
     int methods_given, runs_given, frames_given;
     rp_sim_motion_t motion;
     /* the clocks (rp_sim.h), per camera in rp_sim's order (cam1 cam2 cam3 cam4 cam1b cam3b) */
     double cam_offset_ms[RP_SIM_NCAMS], cam_phase_ms[RP_SIM_NCAMS], cam_fps[RP_SIM_NCAMS];
+    double cam_offset_s[RP_SIM_NCAMS]; /* cam_offset_ms in s */
     double jitter_ms;
     int clocks_given;
     double max_rot;           /* --max-rot DEG (rad here): fail above it; 0: no check */
@@ -348,6 +366,10 @@ static void usage(FILE *out, const char *argv0)
             "                   1 = the plain EKF), for ablation\n"
             "  --no-refine      keep each landmark's first triangulation (the paper's\n"
             "                   structure) instead of refining it, for ablation\n"
+            "  --estimate-offsets  the filters estimate each camera's clock offset but cam1's\n"
+            "                   (estimator.estimate_time_offsets; stereo and gc)\n"
+            "  --known-offsets  the filters are given the true --cam-offsets-ms (their start\n"
+            "                   value with --estimate-offsets): the ceiling of compensation\n"
             "  --layout-study [FILE]  rank placements of cam2/cam4 (FILE: one per line,\n"
             "                   'name x2 y2 z2 yaw2_deg x4 y4 z4 yaw4_deg', cam1's frame, m;\n"
             "                   no FILE: the built-in grid of 27 around the paper's) by the\n"
@@ -500,6 +522,14 @@ static int parse_args(int argc, char **argv, opts_t *o)
             o->no_refine = 1;
             continue;
         }
+        if (strcmp(arg, "--estimate-offsets") == 0) {
+            o->est_offsets = 1;
+            continue;
+        }
+        if (strcmp(arg, "--known-offsets") == 0) {
+            o->known_offsets = 1;
+            continue;
+        }
         if (strcmp(arg, "--layout-study") == 0) {
             o->layout_study = 1;
             if (i + 1 < argc && strncmp(argv[i + 1], "--", 2) != 0) {
@@ -616,6 +646,9 @@ static int parse_args(int argc, char **argv, opts_t *o)
             o->runs = 20;
         }
     }
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        o->cam_offset_s[k] = o->cam_offset_ms[k] * 1e-3;
+    }
     return 0;
 }
 
@@ -694,7 +727,8 @@ static void *worker(void *arg)
 {
     job_t *job = arg;
     const opts_t *o = job->o;
-    const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine};
+    const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
+                               o->known_offsets ? o->cam_offset_s : NULL};
     void *state[MAX_METHODS] = {NULL};
     rp_frameset_t *fs = malloc(sizeof *fs);
     rp_rig_t rig;
@@ -1216,6 +1250,11 @@ static const char *const sim_why[][2] = {
     {"gc.ekf.iterations", "--ekf-iterations"},
     {"mono.ekf.iterations", "--ekf-iterations"},
     {"stereo.refine_structure", "--no-refine"},
+    {"stereo.ekf.toff_estimate", "--estimate-offsets"},
+    {"gc.ekf.toff_estimate", "--estimate-offsets"},
+    {"stereo.ekf.toff0_s", "--known-offsets"},
+    {"gc.ekf.toff0_s", "--known-offsets"},
+    {"mono.ekf.toff0_s", "--known-offsets"},
     {"gc.init_on_sphere", "the scene surrounds the rig: depth along the ray"},
     {"gc.init_depth", "the simulated shell's mid radius (0.667 + 1) / 2 m, +- 0.15 m "
                       "(rp_sim_gc_cfg)"},
@@ -1227,7 +1266,8 @@ static const char *const sim_why[][2] = {
  * each on stderr: the figures on stdout are measured with them. */
 static void print_deviations(const opts_t *o)
 {
-    const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine};
+    const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
+                               o->known_offsets ? o->cam_offset_s : NULL};
     for (unsigned i = 0; i < o->n_methods; ++i) {
         const rp_pipe_layout_t l = o->m[i]->layout;
         rp_pipe_cfg_t cfg;

@@ -57,7 +57,7 @@ static void fill(fixture_t *fx, const window_t *w, uint8_t nk)
             p[3 + a] = (rp_real)(t[3 + a] + (k > 0 ? rp_test_urand(-w->angle_err, w->angle_err)
                                                    : 0.0));
         }
-        assert_ok(rp_gcba_add_keyframe(&fx->ba, p, fx->obs, m));
+        assert_ok(rp_gcba_add_keyframe(&fx->ba, p, fx->obs, m, NULL, NULL));
     }
 }
 
@@ -166,7 +166,7 @@ static void test_without_rotation_the_scale_is_not_claimed(void **state)
             fx->obs[m].uv[1] = (float)uv[1];
             m++;
         }
-        assert_ok(rp_gcba_add_keyframe(&fx->ba, p, fx->obs, m));
+        assert_ok(rp_gcba_add_keyframe(&fx->ba, p, fx->obs, m, NULL, NULL));
     }
     rp_gcba_cfg_t cfg = rp_gcba_default_cfg();
     rp_gcba_result_t r;
@@ -186,7 +186,7 @@ static void test_ring_keeps_the_newest_keyframes(void **state)
     assert_ok(rp_gcba_reset(&ba, 3));
     for (int k = 0; k < 5; ++k) {
         rp_real p[6] = {(rp_real)k, 0, 0, 0, 0, 0};
-        assert_ok(rp_gcba_add_keyframe(&ba, p, &o, 1));
+        assert_ok(rp_gcba_add_keyframe(&ba, p, &o, 1, NULL, NULL));
     }
     assert_int_equal(ba.n_kf, 3);
     rp_real p[6];
@@ -202,7 +202,7 @@ static void test_ring_keeps_the_newest_keyframes(void **state)
     assert_near(q[0], 9, 0.0);
     p[1] = (rp_real)NAN;
     assert_status(rp_gcba_set_pose(&ba, 0, p), RP_E_NAN);
-    assert_status(rp_gcba_add_keyframe(&ba, p, &o, 1), RP_E_NAN);
+    assert_status(rp_gcba_add_keyframe(&ba, p, &o, 1, NULL, NULL), RP_E_NAN);
     assert_int_equal(ba.n_kf, 3);
 }
 
@@ -251,16 +251,16 @@ static void test_bad_input_gives_clear_status(void **state)
     rp_real p[6] = {0};
     /* never reset, bad ring size, NULLs */
     memset(&fx->ba, 0, sizeof(fx->ba));
-    assert_status(rp_gcba_add_keyframe(&fx->ba, p, NULL, 0), RP_E_ARG);
+    assert_status(rp_gcba_add_keyframe(&fx->ba, p, NULL, 0, NULL, NULL), RP_E_ARG);
     assert_status(rp_gcba_reset(&fx->ba, 2), RP_E_ARG);
     assert_status(rp_gcba_reset(&fx->ba, RP_GCBA_MAX_KF + 1), RP_E_ARG);
     assert_status(rp_gcba_reset(NULL, 3), RP_E_ARG);
     assert_ok(rp_gcba_reset(&fx->ba, 6));
-    assert_status(rp_gcba_add_keyframe(&fx->ba, NULL, NULL, 0), RP_E_ARG);
-    assert_status(rp_gcba_add_keyframe(&fx->ba, p, NULL, 3), RP_E_ARG);
+    assert_status(rp_gcba_add_keyframe(&fx->ba, NULL, NULL, 0, NULL, NULL), RP_E_ARG);
+    assert_status(rp_gcba_add_keyframe(&fx->ba, p, NULL, 3, NULL, NULL), RP_E_ARG);
     /* two keyframes are not a window */
-    assert_ok(rp_gcba_add_keyframe(&fx->ba, p, NULL, 0));
-    assert_ok(rp_gcba_add_keyframe(&fx->ba, p, NULL, 0));
+    assert_ok(rp_gcba_add_keyframe(&fx->ba, p, NULL, 0, NULL, NULL));
+    assert_ok(rp_gcba_add_keyframe(&fx->ba, p, NULL, 0, NULL, NULL));
     assert_status(rp_gcba_scale(&fx->ba, rig, (rp_real)1.0, &cfg, &r), RP_E_TOO_FEW);
     /* a window with five landmarks */
     const window_t few = {1.0, 0.0, 2, 0.0, 0};

@@ -156,7 +156,7 @@ static void test_refine_moves_only_used_points(void **state)
     }
     const uint32_t oid[2] = {1, 2};
     const uint8_t used[2] = {1, 0};
-    assert_ok(rp_lmtab_refine(&tab, &rig, p0, o, oid, used, 2, RP_C(0.5), RP_C(0.0)));
+    assert_ok(rp_lmtab_refine(&tab, &rig, p0, NULL, NULL, o, oid, used, 2, RP_C(0.5), RP_C(0.0)));
     uint16_t s1, s2;
     assert_ok(rp_lmtab_find(&tab, 1, &s1));
     assert_ok(rp_lmtab_find(&tab, 2, &s2));
@@ -166,7 +166,8 @@ static void test_refine_moves_only_used_points(void **state)
     assert_true(e1 < 0.5 * e0);                                  /* pulled onto the ray */
     assert_memory_equal(&tab.pt[s2], &start, sizeof(start));     /* not used: unchanged */
     const rp_real bad[6] = {(rp_real)NAN, 0, 0, 0, 0, 0};
-    assert_true(rp_lmtab_refine(&tab, &rig, bad, o, oid, NULL, 2, RP_C(0.5), RP_C(0.0)) != RP_OK);
+    assert_true(rp_lmtab_refine(&tab, &rig, bad, NULL, NULL, o, oid, NULL, 2, RP_C(0.5), RP_C(0.0)) !=
+                RP_OK);
 }
 
 static void test_bad_input_is_refused(void **state)
@@ -186,7 +187,7 @@ static void test_bad_input_is_refused(void **state)
     assert_status(rp_lmtab_gather(&tab, &fs, &cam_bad, 1, 0, obs, ids, 1, &n), RP_E_ARG);
     assert_status(rp_lmtab_mark_ids(&tab, NULL, NULL, 1), RP_E_ARG);
     assert_status(rp_lmtab_drop_unmarked(NULL, 0, NULL), RP_E_ARG);
-    assert_status(rp_lmtab_refine(&tab, NULL, NULL, obs, ids, NULL, 0, RP_C(0.5), RP_C(0.0)),
+    assert_status(rp_lmtab_refine(&tab, NULL, NULL, NULL, NULL, obs, ids, NULL, 0, RP_C(0.5), RP_C(0.0)),
                   RP_E_ARG);
 }
 

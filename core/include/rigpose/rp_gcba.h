@@ -64,6 +64,10 @@ typedef struct {
 
 typedef struct {
     rp_real p[6];   /* filter pose [t (map units), alpha beta gamma (rad)] of cam1 */
+    rp_real rate[6];/* the filter's rate there [v (map units/s); omega (rad/s)] (rp_ekf.h) */
+    rp_real cam_dt[RP_MAX_CAMS]; /* camera k's capture time minus the pose's, s: its images are
+                     * seen from p [+] cam_dt[k] rate (rp_pose_lin_at); the adjustment moves p
+                     * and keeps these */
     uint16_t n;     /* observations */
     rp_gcba_obs_t obs[RP_GCBA_MAX_OBS_KF];
 } rp_gcba_kf_t;
@@ -113,8 +117,10 @@ typedef struct {
     uint8_t head;                    /* index of the oldest */
     /* scratch of rp_gcba_scale */
     double x[RP_GCBA_MAX_KF][6];     /* keyframe poses in metres */
-    rp_pose_lin_t pl[RP_GCBA_MAX_KF];/* the same, prepared for projection */
-    uint8_t pl_ok[RP_GCBA_MAX_KF];
+    double mu;                       /* the map's unit of the adjustment under way (m) */
+    rp_pose_lin_t pl[RP_GCBA_MAX_KF][RP_MAX_CAMS]; /* each camera's pose at its capture time
+                                      * (rp_gcba_kf_t), prepared for projection */
+    uint8_t pl_ok[RP_GCBA_MAX_KF][RP_MAX_CAMS];
     double X[RP_GCBA_MAX_LM][3];     /* landmarks, m */
     double x0[RP_GCBA_MAX_KF][6];    /* the estimate before a step (restored if it is worse) */
     double X0[RP_GCBA_MAX_LM][3];
@@ -140,10 +146,12 @@ typedef struct {
 rp_status_t rp_gcba_reset(rp_gcba_t *ba, uint8_t max_kf);
 
 /* Append a keyframe (the oldest is dropped when the ring is full). n > RP_GCBA_MAX_OBS_KF keeps
- * the first RP_GCBA_MAX_OBS_KF. RP_E_ARG (NULL, or never reset), RP_E_NAN (non-finite pose: not
- * added). */
+ * the first RP_GCBA_MAX_OBS_KF. rate and cam_dt (both NULL: every camera at p) place each
+ * camera's images at its capture time (rp_gcba_kf_t). RP_E_ARG (NULL, or never reset, or only
+ * one of rate / cam_dt), RP_E_NAN (non-finite pose, rate or time: not added). */
 rp_status_t rp_gcba_add_keyframe(rp_gcba_t *ba, const rp_real p[6], const rp_gcba_obs_t *obs,
-                                 uint16_t n);
+                                 uint16_t n, const rp_real rate[6],
+                                 const rp_real cam_dt[RP_MAX_CAMS]);
 
 /* Adjust the window with rig (metres) starting from the keyframe poses divided by mu, and
  * report the map's unit it implies. The stored keyframes are left as they were (the solution:

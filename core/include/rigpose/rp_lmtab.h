@@ -74,10 +74,12 @@ rp_status_t rp_lmtab_drop_unmarked(rp_lmtab_t *t, uint32_t group_mask, uint16_t 
 
 /* Structure EKF step of every used observation: obs[i] (with used[i] != 0, or every one if used
  * is NULL) updates the point of landmark ids[i], seen by camera obs[i].cam of rig at pose p
- * ([t, angles] in the layout's world), with pixel noise sigma_px and gate gate_chi2
- * (rp_struct_update; a gated or failed update leaves that point as it was).
- * RP_E_ARG (NULL), rp_pose_lin_set's errors (nothing updated). */
+ * ([t, angles] in the layout's world) moved to that camera's capture time: obs[i].dt +
+ * toff[cam] seconds at rate xi (rp_pose_lin_at; xi or toff NULL: every camera at p, offsets
+ * 0), with pixel noise sigma_px and gate gate_chi2 (rp_struct_update; a gated or failed update
+ * leaves that point as it was). RP_E_ARG (NULL), rp_pose_lin_set's errors (nothing updated). */
 rp_status_t rp_lmtab_refine(rp_lmtab_t *t, const rp_rig_t *rig, const rp_real p[6],
+                            const rp_real xi[6], const rp_real toff[RP_MAX_CAMS],
                             const rp_obs_t *obs, const uint32_t *ids, const uint8_t *used,
                             uint32_t n, rp_real sigma_px, rp_real gate_chi2);
 

@@ -53,6 +53,13 @@ rp_status_t rp_rig_check(const rp_rig_t *rig);
 /* Prepare pose p. RP_E_NAN if p has a non-finite element. */
 rp_status_t rp_pose_lin_set(rp_pose_lin_t *pl, const rp_real p[6]);
 
+/* Prepare the pose delta seconds after p under constant rate xi = [v; omega] (m/s, world-frame
+ * rad/s: the pose EKF's rate state): p [+] delta xi (translation + delta v, rotation
+ * Exp(delta omega) R), the pose at a camera's capture time (rp_ekf.h). xi NULL or delta 0: p.
+ * RP_E_NAN for non-finite input. */
+rp_status_t rp_pose_lin_at(rp_pose_lin_t *pl, const rp_real p[6], const rp_real xi[6],
+                           rp_real delta);
+
 /* Camera-k coordinates P (m) of world point M at pose pl (eq. 2). RP_E_ARG for a bad k. */
 rp_status_t rp_rig_cam_point(const rp_rig_t *rig, uint8_t k, const rp_pose_lin_t *pl,
                              const rp_real M[3], rp_real P[3]);

@@ -32,6 +32,12 @@ extern "C" {
 
 #define RP_VO_START_SIGMA_V RP_C(1.0)  /* velocity prior when a filter starts, 1-sigma, m/s */
 #define RP_VO_START_SIGMA_W RP_C(1.0)  /* angular-rate prior when it starts, 1-sigma, rad/s */
+/* A camera captured delta seconds from the state's time sees from the pose the filter's rate
+ * puts there (rp_ekf.h); before the filter has a rate (its first frame set; stereo: its first
+ * two, whose landmarks come before the update) that pose is known to |delta| times the start
+ * sigmas only, so a camera farther than this from the state's time makes no landmarks then
+ * (s): 1 ms at RP_VO_START_SIGMA_W is 0.8 px at 800 px focal length, the pixel noise's size. */
+#define RP_VO_START_SKEW_S RP_C(0.001)
 #define RP_VO_ORIGIN_VAR RP_C(1e-12)   /* variance of the pose at the first frame set (zero by
                                         * definition; kept positive definite), m^2 and rad^2 */
 #define RP_VO_MIN_START 6              /* landmarks a first frame set needs to count as a start

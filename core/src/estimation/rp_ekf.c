@@ -469,12 +469,8 @@ static rp_status_t obs_predict(const yblock_t *y, const rp_rig_t *rig, const rp_
     }
     const rp_real delta = o->dt + toff[o->cam];
     if (!cc->valid || cc->cam != o->cam || cc->delta != delta) {
-        rp_real d[NP], pc[NP];
-        for (int i = 0; i < NP; ++i) {
-            d[i] = delta * xi[i];
-        }
         cc->valid = 0;
-        if (rp_pose_plus(pl->p, d, pc) != RP_OK || rp_pose_lin_set(&cc->pl, pc) != RP_OK) {
+        if (rp_pose_lin_at(&cc->pl, pl->p, xi, delta) != RP_OK) {
             return RP_E_NAN;
         }
         cc->valid = 1;

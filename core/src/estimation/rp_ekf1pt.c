@@ -93,16 +93,34 @@ static int obs_ok(const rp_rig_t *rig, const rp_obs_t *o)
            rp_all_finite(o->M, 3) && o->cam < rig->n_cams;
 }
 
-/* Support of pose p: cand[k] = 1 for usable k with w |z - h(p)|^2 <= thr2; returns the count,
- * or 0 as soon as it cannot exceed `beat` (n_ok usable in all). */
-static uint32_t support(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
-                        const rp_real p[6], rp_real thr2, uint32_t n_ok, uint32_t beat)
-{
+/* The pose at observation o's capture time from pose p, at e's rate and clock offsets
+ * (rp_ekf.h, rp_pose_lin_at), into *pl; *pl is kept while the time does not change (*have: pl
+ * holds the pose *delta after p). 0 if it cannot be formed. */
+typedef struct {
     rp_pose_lin_t pl;
-    memset(s->cand, 0, n);
-    if (rp_pose_lin_set(&pl, p) != RP_OK) {
-        return 0;
+    rp_real delta;
+    int have;
+} campose_t;
+
+static int obs_pose(const rp_ekf_t *e, const rp_real p[6], const rp_obs_t *o, campose_t *cp)
+{
+    const rp_real d = o->dt + (o->cam < RP_MAX_CAMS ? e->toff[o->cam] : RP_C(0.0));
+    if (!cp->have || d != cp->delta) {
+        cp->have = rp_pose_lin_at(&cp->pl, p, e->x + NP, d) == RP_OK;
+        cp->delta = d;
     }
+    return cp->have;
+}
+
+/* Support of pose p (each observation at its camera's time at e's rate and offsets): cand[k] = 1
+ * for usable k with w |z - h(p)|^2 <= thr2; returns the count, or 0 as soon as it cannot exceed
+ * `beat` (n_ok usable in all). */
+static uint32_t support(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_ekf_t *e,
+                        const rp_obs_t *obs, uint32_t n, const rp_real p[6], rp_real thr2,
+                        uint32_t n_ok, uint32_t beat)
+{
+    campose_t cp = {0};
+    memset(s->cand, 0, n);
     uint32_t c = 0, left = n_ok;
     for (uint32_t k = 0; k < n; ++k) {
         rp_real uv[2];
@@ -113,7 +131,8 @@ static uint32_t support(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_obs_t *obs
             return 0;
         }
         left--;
-        if (rp_rig_project(rig, obs[k].cam, &pl, obs[k].M, uv, NULL, NULL) != RP_OK) {
+        if (!obs_pose(e, p, &obs[k], &cp) ||
+            rp_rig_project(rig, obs[k].cam, &cp.pl, obs[k].M, uv, NULL, NULL) != RP_OK) {
             continue;
         }
         const rp_real du = obs[k].uv[0] - uv[0], dv = obs[k].uv[1] - uv[1];
@@ -172,7 +191,7 @@ static uint32_t local_opt(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_obs_t *o
         memset(s->cand, 0, n);
         return 0;
     }
-    return support(s, rig, obs, n, s->post.x, thr2, n_ok, 0);
+    return support(s, rig, &s->post, obs, n, s->post.x, thr2, n_ok, 0);
 }
 
 /* Observations usable, not in s->best and inside the filter's gate at ekf's state with its
@@ -182,16 +201,13 @@ static uint32_t rescue(rp_ekf1pt_t *s, const rp_ekf_t *ekf, const rp_rig_t *rig,
                        const rp_obs_t *obs, uint32_t n, rp_real s2, rp_real gate)
 {
     rp_real C[36];
-    rp_pose_lin_t pl;
+    campose_t cp = {0};
     pose_cov(ekf, C);
-    if (rp_pose_lin_set(&pl, ekf->x) != RP_OK) {
-        return 0;
-    }
     uint32_t added = 0;
     for (uint32_t k = 0; k < n; ++k) {
         rp_real uv[2], J[12], S[4], Si[4], CJt[12];
-        if (!s->ok[k] || s->best[k] ||
-            rp_rig_project(rig, obs[k].cam, &pl, obs[k].M, uv, J, NULL) != RP_OK) {
+        if (!s->ok[k] || s->best[k] || !obs_pose(ekf, ekf->x, &obs[k], &cp) ||
+            rp_rig_project(rig, obs[k].cam, &cp.pl, obs[k].M, uv, J, NULL) != RP_OK) {
             continue;
         }
         innov_cov(J, C, RESCUE_VAR * s2 / obs[k].w, S, CJt);
@@ -241,13 +257,15 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         return rp_ekf_update(ekf, rig, obs, n, used, &info->ekf); /* its fault handling */
     }
 
-    /* Step 1: usable observations, then hypotheses from single ones. */
+    /* Step 1: usable observations, then hypotheses from single ones (each observation at its
+     * camera's time: the prior's pose there). */
     uint32_t n_ok = 0;
+    campose_t cp0 = {0};
     for (uint32_t k = 0; k < n; ++k) {
         rp_real uv[2];
-        s->ok[k] = (uint8_t)(obs_ok(rig, &obs[k]) &&
-                             rp_rig_project(rig, obs[k].cam, &pl0, obs[k].M, uv, NULL, NULL) ==
-                                 RP_OK);
+        s->ok[k] = (uint8_t)(obs_ok(rig, &obs[k]) && obs_pose(ekf, p0, &obs[k], &cp0) &&
+                             rp_rig_project(rig, obs[k].cam, &cp0.pl, obs[k].M, uv, NULL,
+                                            NULL) == RP_OK);
         n_ok += s->ok[k];
     }
     info->n_usable = (uint16_t)n_ok;
@@ -267,7 +285,8 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
             }
         }
         rp_real uv[2], J[12], S[4], Si[4], CJt[12];
-        if (rp_rig_project(rig, obs[i].cam, &pl0, obs[i].M, uv, J, NULL) != RP_OK) {
+        if (!obs_pose(ekf, p0, &obs[i], &cp0) ||
+            rp_rig_project(rig, obs[i].cam, &cp0.pl, obs[i].M, uv, J, NULL) != RP_OK) {
             continue;
         }
         innov_cov(J, C, s2 / obs[i].w, S, CJt);
@@ -283,7 +302,7 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         if (rp_pose_plus(p0, d, p) != RP_OK) {
             continue;
         }
-        const uint32_t c = support(s, rig, obs, n, p, thr2, n_ok, best);
+        const uint32_t c = support(s, rig, ekf, obs, n, p, thr2, n_ok, best);
         if (c > best) {
             /* the hypothesis's own support, then its refinement's if that is larger */
             best = c;

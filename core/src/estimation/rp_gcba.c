@@ -37,13 +37,15 @@ rp_status_t rp_gcba_reset(rp_gcba_t *ba, uint8_t max_kf)
 }
 
 rp_status_t rp_gcba_add_keyframe(rp_gcba_t *ba, const rp_real p[6], const rp_gcba_obs_t *obs,
-                                 uint16_t n)
+                                 uint16_t n, const rp_real rate[6],
+                                 const rp_real cam_dt[RP_MAX_CAMS])
 {
     if (!ba || !p || (n > 0 && !obs) || ba->cap < 3 || ba->cap > RP_GCBA_MAX_KF ||
-        ba->state != RP_GCBA_IDLE) {
+        ba->state != RP_GCBA_IDLE || (!rate) != (!cam_dt)) {
         return RP_E_ARG;
     }
-    if (!rp_all_finite(p, 6)) {
+    if (!rp_all_finite(p, 6) || (rate && (!rp_all_finite(rate, 6) ||
+                                          !rp_all_finite(cam_dt, RP_MAX_CAMS)))) {
         return RP_E_NAN;
     }
     uint8_t slot;
@@ -56,6 +58,12 @@ rp_status_t rp_gcba_add_keyframe(rp_gcba_t *ba, const rp_real p[6], const rp_gcb
     }
     rp_gcba_kf_t *kf = &ba->kf[slot];
     memcpy(kf->p, p, sizeof(kf->p));
+    for (int i = 0; i < 6; ++i) {
+        kf->rate[i] = rate ? rate[i] : RP_C(0.0);
+    }
+    for (int c = 0; c < RP_MAX_CAMS; ++c) {
+        kf->cam_dt[c] = cam_dt ? cam_dt[c] : RP_C(0.0);
+    }
     kf->n = n < RP_GCBA_MAX_OBS_KF ? n : (uint16_t)RP_GCBA_MAX_OBS_KF;
     if (kf->n > 0) {
         memcpy(kf->obs, obs, kf->n * sizeof(obs[0]));
@@ -160,15 +168,18 @@ static void pose_plus_d(double x[6], const double d[6])
     }
 }
 
-/* Ray of observation o at keyframe pose x: origin c and unit direction w (world, m). */
-static rp_status_t obs_ray(const rp_rig_t *rig, const double x[6], const rp_gcba_obs_t *o,
-                           double c[3], double w[3])
+/* The pose camera cam of keyframe k saw its image from (m): x [+] cam_dt rate (rp_gcba_kf_t,
+ * the rate's translation in metres: over mu). */
+static rp_status_t cam_pose(const rp_gcba_t *ba, int k, uint8_t cam, rp_pose_lin_t *pl);
+
+/* Ray of observation o of keyframe k: origin c and unit direction w (world, m). */
+static rp_status_t obs_ray(const rp_gcba_t *ba, const rp_rig_t *rig, int k,
+                           const rp_gcba_obs_t *o, double c[3], double w[3])
 {
-    rp_real p[6], xn[2];
+    rp_real xn[2];
     rp_pose_lin_t pl;
-    pose_real(x, p);
     const rp_real uv[2] = {(rp_real)o->uv[0], (rp_real)o->uv[1]};
-    rp_status_t st = rp_pose_lin_set(&pl, p);
+    rp_status_t st = o->cam < RP_MAX_CAMS ? cam_pose(ba, k, o->cam, &pl) : RP_E_ARG;
     if (st == RP_OK) {
         st = rp_cam_unproject(&rig->cam[o->cam].cam, uv, xn);
     }
@@ -185,7 +196,7 @@ static rp_status_t obs_ray(const rp_rig_t *rig, const double x[6], const rp_gcba
     for (int a = 0; a < 3; ++a) {
         w[a] = (double)pl.R[a * 3 + 0] * dr[0] + (double)pl.R[a * 3 + 1] * dr[1] +
                (double)pl.R[a * 3 + 2] * dr[2];
-        c[a] = x[a] + (double)pl.R[a * 3 + 0] * (double)rc->D[0] +
+        c[a] = (double)pl.p[a] + (double)pl.R[a * 3 + 0] * (double)rc->D[0] +
                (double)pl.R[a * 3 + 1] * (double)rc->D[1] +
                (double)pl.R[a * 3 + 2] * (double)rc->D[2];
         n2 += w[a] * w[a];
@@ -205,8 +216,8 @@ static int triangulate(rp_gcba_t *ba, const rp_rig_t *rig, int L, double min_ang
     const rp_gcba_obs_t *oa = &kf_at(ba, ba->ob_kf[a])->obs[ba->ob_i[a]];
     const rp_gcba_obs_t *ob = &kf_at(ba, ba->ob_kf[b])->obs[ba->ob_i[b]];
     double c1[3], w1[3], c2[3], w2[3];
-    if (obs_ray(rig, ba->x[ba->ob_kf[a]], oa, c1, w1) != RP_OK ||
-        obs_ray(rig, ba->x[ba->ob_kf[b]], ob, c2, w2) != RP_OK) {
+    if (obs_ray(ba, rig, ba->ob_kf[a], oa, c1, w1) != RP_OK ||
+        obs_ray(ba, rig, ba->ob_kf[b], ob, c2, w2) != RP_OK) {
         return 0;
     }
     /* c1 + s1 w1 ~ c2 + s2 w2: [1 -q; q -1] [s1 s2]^T = [e.w1 e.w2]^T, e = c2 - c1 */
@@ -242,7 +253,8 @@ static int linearise(const rp_gcba_t *ba, const rp_rig_t *rig, int j, const doub
     for (int a = 0; a < 3; ++a) {
         M[a] = (rp_real)X[a];
     }
-    if (!ba->pl_ok[k] || rp_rig_project(rig, o->cam, &ba->pl[k], M, uv, jp, jm) != RP_OK) {
+    if (o->cam >= RP_MAX_CAMS || !ba->pl_ok[k][o->cam] ||
+        rp_rig_project(rig, o->cam, &ba->pl[k][o->cam], M, uv, jp, jm) != RP_OK) {
         return 0;
     }
     r[0] = (double)o->uv[0] - (double)uv[0];
@@ -263,13 +275,24 @@ static int linearise(const rp_gcba_t *ba, const rp_rig_t *rig, int j, const doub
 
 /* Build the reduced normal equations S dx = g at the current estimate; returns the robust cost
  * and fills the landmarks' Vi, v; *n_obs the observations used. */
-/* The keyframes' poses prepared for projection (once per pass). */
+static rp_status_t cam_pose(const rp_gcba_t *ba, int k, uint8_t cam, rp_pose_lin_t *pl)
+{
+    const rp_gcba_kf_t *kf = kf_at(ba, k);
+    rp_real p[6], xi[6];
+    pose_real(ba->x[k], p);
+    for (int i = 0; i < 6; ++i) {
+        xi[i] = i < 3 ? (rp_real)((double)kf->rate[i] / ba->mu) : kf->rate[i];
+    }
+    return rp_pose_lin_at(pl, p, xi, kf->cam_dt[cam]);
+}
+
+/* Each keyframe's cameras' poses prepared for projection (once per pass). */
 static void prepare_poses(rp_gcba_t *ba, int nk)
 {
     for (int k = 0; k < nk; ++k) {
-        rp_real p[6];
-        pose_real(ba->x[k], p);
-        ba->pl_ok[k] = (uint8_t)(rp_pose_lin_set(&ba->pl[k], p) == RP_OK);
+        for (uint8_t c = 0; c < RP_MAX_CAMS; ++c) {
+            ba->pl_ok[k][c] = (uint8_t)(cam_pose(ba, k, c, &ba->pl[k][c]) == RP_OK);
+        }
     }
 }
 
@@ -422,6 +445,7 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     ba->state = RP_GCBA_IDLE;
     ba->rig = rig;
     ba->cfg = *cfg;
+    ba->mu = (double)mu;
     ba->it = 0;
     memset(&ba->res, 0, sizeof(ba->res));
     const int nk = ba->n_kf;

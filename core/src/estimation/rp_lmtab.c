@@ -117,6 +117,7 @@ rp_status_t rp_lmtab_drop_unmarked(rp_lmtab_t *t, uint32_t group_mask, uint16_t 
 }
 
 rp_status_t rp_lmtab_refine(rp_lmtab_t *t, const rp_rig_t *rig, const rp_real p[6],
+                            const rp_real xi[6], const rp_real toff[RP_MAX_CAMS],
                             const rp_obs_t *obs, const uint32_t *ids, const uint8_t *used,
                             uint32_t n, rp_real sigma_px, rp_real gate_chi2)
 {
@@ -124,13 +125,22 @@ rp_status_t rp_lmtab_refine(rp_lmtab_t *t, const rp_rig_t *rig, const rp_real p[
         return RP_E_ARG;
     }
     rp_pose_lin_t pl;
-    const rp_status_t st = rp_pose_lin_set(&pl, p);
+    rp_status_t st = rp_pose_lin_set(&pl, p);
     if (st != RP_OK) {
         return st;
     }
+    rp_real delta = RP_C(0.0); /* of pl */
     for (uint32_t i = 0; i < n; ++i) {
         uint16_t s;
         if ((!used || used[i]) && rp_idmap_find(&t->map, ids[i], &s) == RP_OK) {
+            const uint8_t c = obs[i].cam;
+            const rp_real d = xi && toff && c < RP_MAX_CAMS ? obs[i].dt + toff[c] : RP_C(0.0);
+            if (d != delta) {
+                if (rp_pose_lin_at(&pl, p, xi, d) != RP_OK) {
+                    continue; /* a non-finite stamp: this observation only */
+                }
+                delta = d;
+            }
             /* ignored: a point its gate refuses stays as it was (the gate, not a fault) */
             (void)rp_struct_update(&t->pt[s], rig, obs[i].cam, &pl, obs[i].uv, sigma_px,
                                    gate_chi2);

@@ -91,6 +91,23 @@ rp_status_t rp_pose_lin_set(rp_pose_lin_t *pl, const rp_real p[6])
     return RP_OK;
 }
 
+rp_status_t rp_pose_lin_at(rp_pose_lin_t *pl, const rp_real p[6], const rp_real xi[6],
+                           rp_real delta)
+{
+    if (!pl || !p) {
+        return RP_E_ARG;
+    }
+    if (xi == NULL || delta == RP_C(0.0)) {
+        return rp_pose_lin_set(pl, p);
+    }
+    rp_real d[6], q[6];
+    for (int i = 0; i < 6; ++i) {
+        d[i] = delta * xi[i];
+    }
+    const rp_status_t st = rp_pose_plus(p, d, q);
+    return st == RP_OK ? rp_pose_lin_set(pl, q) : st;
+}
+
 rp_status_t rp_pose_plus(const rp_real p[6], const rp_real d[6], rp_real out[6])
 {
     if (p == NULL || d == NULL || out == NULL) {

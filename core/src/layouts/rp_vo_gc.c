@@ -367,8 +367,12 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
     uint32_t flags = RP_EST_INITIALISING;
     for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
         const uint8_t cam = vo->cfg.cams[k];
-        /* ignored: the count is not needed here */
-        (void)top_up_camera(vo, fs, cam, &pl, NULL);
+        /* a camera not at the state's time waits for the filter's rate (RP_VO_START_SKEW_S) */
+        const rp_real d = (rp_real)fs->cam_dt_us[cam] * RP_C(1e-6) + vo->ekf.toff[cam];
+        if (rp_fabs(d) <= RP_VO_START_SKEW_S) {
+            /* ignored: the count is not needed here */
+            (void)top_up_camera(vo, fs, cam, &pl, NULL);
+        }
         if (vo->lm.map.n_group[cam] < vo->cfg.min_tracked) {
             flags |= RP_EST_DEGRADED;
         }
@@ -436,11 +440,13 @@ static uint32_t select_for_pose(rp_vo_gc_t *vo, uint32_t n, uint32_t *n_mature)
     return m;
 }
 
-/* Each observed landmark's structure EKF takes its pixel at the updated pose, with the pose's
- * projected uncertainty added to the pixel noise. */
+/* Each observed landmark's structure EKF takes its pixel at the updated pose (moved to its
+ * camera's capture time, rp_pose_lin_at), with the pose's projected uncertainty added to the
+ * pixel noise. */
 static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
 {
     rp_pose_lin_t pl;
+    rp_real delta = RP_C(0.0); /* of pl */
     if (rp_pose_lin_set(&pl, vo->ekf.x) != RP_OK) {
         return;
     }
@@ -454,6 +460,13 @@ static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
         }
         rp_point3_t *pt = &vo->lm.pt[s];
         const uint8_t cam = vo->lm.map.slot_group[s];
+        const rp_real d = vo->obs[i].dt + vo->ekf.toff[cam];
+        if (d != delta) {
+            if (rp_pose_lin_at(&pl, vo->ekf.x, vo->ekf.x + 6, d) != RP_OK) {
+                continue; /* a non-finite stamp: this observation only */
+            }
+            delta = d;
+        }
         rp_real uv[2], Jp[12];
         if (rp_rig_project(&vo->rig_m, cam, &pl, pt->M, uv, Jp, NULL) != RP_OK) {
             continue;
@@ -579,14 +592,17 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
         flags |= RP_EST_LOST;
     }
 
-    /* Top up cameras under their threshold from this frame, at the (updated) pose. */
+    /* Top up cameras under their threshold from this frame, at the (updated) pose at each
+     * camera's capture time. */
     rp_pose_lin_t pl;
     if (rp_pose_lin_set(&pl, vo->ekf.x) == RP_OK) {
         rp_real Ppp[36];
         pose_cov(vo, Ppp);
         for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
             const uint8_t cam = vo->cfg.cams[k];
-            if (vo->lm.map.n_group[cam] < vo->cfg.min_tracked && had_image[cam]) {
+            const rp_real d = (rp_real)fs->cam_dt_us[cam] * RP_C(1e-6) + vo->ekf.toff[cam];
+            if (vo->lm.map.n_group[cam] < vo->cfg.min_tracked && had_image[cam] &&
+                rp_pose_lin_at(&pl, vo->ekf.x, vo->ekf.x + 6, d) == RP_OK) {
                 if (top_up_camera(vo, fs, cam, &pl, Ppp) > 0) {
                     flags |= RP_EST_REINIT;
                 }

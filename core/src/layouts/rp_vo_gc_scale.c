@@ -296,7 +296,12 @@ void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, int busy)
             m++;
         }
     }
-    if (rp_gcba_add_keyframe(&vo->ba, vo->ekf.x, o, m) != RP_OK) {
+    /* each camera's images at its capture time (rp_ekf.h): stamp offset plus clock offset */
+    rp_real cam_dt[RP_MAX_CAMS];
+    for (uint8_t c = 0; c < RP_MAX_CAMS; ++c) {
+        cam_dt[c] = (rp_real)fs->cam_dt_us[c] * RP_C(1e-6) + vo->ekf.toff[c];
+    }
+    if (rp_gcba_add_keyframe(&vo->ba, vo->ekf.x, o, m, vo->ekf.x + 6, cam_dt) != RP_OK) {
         return;
     }
     uint8_t n_kf = 0;

@@ -426,8 +426,9 @@ rp_status_t rp_vo_mono_step(rp_vo_mono_t *vo, const rp_frameset_t *fs, rp_estima
         flags |= RP_EST_TRACKING;
         /* step 4: each used observation updates its landmark at the new pose */
         /* ignored: a point its gate refuses stays as it was (the gate, not a fault) */
-        (void)rp_lmtab_refine(&vo->lm, &vo->own, vo->ekf.x, vo->obs, vo->obs_id, vo->used, n,
-                              vo->cfg.ekf.sigma_px, vo->cfg.ekf.gate_chi2);
+        (void)rp_lmtab_refine(&vo->lm, &vo->own, vo->ekf.x, vo->ekf.x + 6, vo->ekf.toff, vo->obs,
+                              vo->obs_id, vo->used, n, vo->cfg.ekf.sigma_px,
+                              vo->cfg.ekf.gate_chi2);
         for (uint32_t i = 0; i < n; ++i) {
             if (vo->used[i]) {
                 n_used++;

@@ -146,19 +146,17 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
     const rp_vo_stereo_cfg_t *cfg = &vo->cfg;
     /* each camera's capture time relative to the state's (rp_ekf.h): the pair's two images
      * must be near-simultaneous; the points go into the world at camera a's pose then, from
-     * the filter's constant velocity */
+     * the filter's constant velocity, which it has from its second frame set on (before, a
+     * pair not at the state's time waits: RP_VO_START_SKEW_S) */
     const rp_real da = (rp_real)fs->cam_dt_us[sp->a] * RP_C(1e-6) + vo->ekf.toff[sp->a];
     const rp_real db = (rp_real)fs->cam_dt_us[sp->b] * RP_C(1e-6) + vo->ekf.toff[sp->b];
-    if (!(rp_fabs(da - db) <= cfg->max_pair_skew_s)) {
+    if (!(rp_fabs(da - db) <= cfg->max_pair_skew_s) ||
+        (vo->frame < 2 && !(rp_fabs(da) <= RP_VO_START_SKEW_S))) {
         vo->skewed = 1;
         return 0;
     }
-    rp_real d[6], pa[6];
-    for (int i = 0; i < 6; ++i) {
-        d[i] = da * vo->ekf.x[6 + i];
-    }
     rp_pose_lin_t pl;
-    if (rp_pose_plus(p, d, pa) != RP_OK || rp_pose_lin_set(&pl, pa) != RP_OK) {
+    if (rp_pose_lin_at(&pl, p, vo->ekf.x + 6, da) != RP_OK) {
         return 0;
     }
     uint16_t added = 0;
@@ -636,8 +634,9 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         if (vo->cfg.refine_structure) {
             /* step 4: each used observation updates its landmark at the new pose */
             /* ignored: a point its gate refuses stays as it was (the gate, not a fault) */
-            (void)rp_lmtab_refine(&vo->lm, vo->rig, vo->ekf.x, vo->obs, vo->obs_id, vo->used, n,
-                                  vo->cfg.ekf.sigma_px, vo->cfg.ekf.gate_chi2);
+            (void)rp_lmtab_refine(&vo->lm, vo->rig, vo->ekf.x, vo->ekf.x + 6, vo->ekf.toff,
+                                  vo->obs, vo->obs_id, vo->used, n, vo->cfg.ekf.sigma_px,
+                                  vo->cfg.ekf.gate_chi2);
         }
         if (n_gated > 0) {
             flags |= RP_EST_GATED;
