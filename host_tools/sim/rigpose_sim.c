@@ -10,14 +10,19 @@
  * depend on the thread count (only the timings do).
  *
  * usage: rigpose-sim [--methods LIST] [--runs N] [--frames N] [--seed S] [--focal-px F]
- *                    [--noise-px S] [--motion paper|turn] [--threads N] [--json] [--help]
+ *                    [--noise-px S] [--motion paper|turn|pitch|smooth] [--cam-offsets-ms LIST]
+ *                    [--jitter-ms S] [--cam-fps LIST] [--cam-phase-ms LIST] [--threads N]
+ *                    [--json] [--help]
  *        rigpose-sim --layout-study [FILE] [same options]
  *
  * --motion turn (rp_sim.h) runs a turn on the spot instead of the paper's random walk (200
  * frames unless --frames: one full turn) and adds to each row the rotation error as one angle
  * (the geodesic distance between the estimated and the true rotation, which does not depend on
  * the angles' parametrisation), overall, within 10 degrees of yaw +-90 (where the paper's
- * angles are singular) and its largest frame.
+ * angles are singular) and its largest frame. --motion smooth (rp_sim.h) is a smooth wander
+ * (sums of sinusoids, about 0.5 m/s and 1 rad/s at their peaks) with the rotation error too; with
+ * a continuous motion the cameras can have their own clocks (--cam-offsets-ms, --jitter-ms,
+ * --cam-fps, --cam-phase-ms: rp_sim.h), which the estimators see only through the stamps.
  *
  * The layout study runs the selected methods (default gc,rc; 20 runs) once per candidate
  * placement of cam2 and cam4 (from FILE, format in rp_sim_layout.h, or the built-in grid) and
@@ -48,6 +53,7 @@
 #define NCOL 6
 
 static const char *const col_name[NCOL] = {"tx", "ty", "tz", "alpha", "beta", "gamma"};
+_Static_assert(NCOL == RP_SIM_NCAMS, "print_cols prints the per-camera clocks too");
 
 /* ---- the paper's Table 1 (docs/design.md) ------------------------------------------------------- */
 
@@ -284,6 +290,10 @@ typedef struct {
     const char *layout_file;  /* its FILE, or NULL for the built-in grid */
     int methods_given, runs_given, frames_given;
     rp_sim_motion_t motion;
+    /* the clocks (rp_sim.h), per camera in rp_sim's order (cam1 cam2 cam3 cam4 cam1b cam3b) */
+    double cam_offset_ms[RP_SIM_NCAMS], cam_phase_ms[RP_SIM_NCAMS], cam_fps[RP_SIM_NCAMS];
+    double jitter_ms;
+    int clocks_given;
     double max_rot;           /* --max-rot DEG (rad here): fail above it; 0: no check */
     int64_t trace_run;        /* --trace R: per-frame lines of run R on stderr; -1: none, -2: all */
 } opts_t;
@@ -312,9 +322,24 @@ static void usage(FILE *out, const char *argv0)
             "                   as one angle (rot), near yaw +-90 deg (rot90) and its worst frame;\n"
             "                   the angle columns compare each estimate with the nearer of the\n"
             "                   truth's two angle triples (a, b, g) and (a+pi, pi-b, g+pi);\n"
-            "                   pitch: the same turn about cam1's x axis (beta stays near 0)\n"
-            "  --max-rot DEG    with --motion turn/pitch: exit status 1 if a method's largest\n"
-            "                   rotation error (rot_max) or a lost frame exceeds DEG / occurs\n"
+            "                   pitch: the same turn about cam1's x axis (beta stays near 0);\n"
+            "                   smooth: a smooth wander, sums of sinusoids per axis, peaks about\n"
+            "                   0.5 m/s and 1 rad/s (rp_sim.h), 100 frames unless --frames;\n"
+            "                   adds rot and rot_max\n"
+            "  Camera clocks (need --motion turn, pitch or smooth; LIST: up to 6 numbers, one per\n"
+            "  camera in rp_sim's order cam1,cam2,cam3,cam4,cam1b,cam3b, missing ones 0; the\n"
+            "  estimators see only the stamps):\n"
+            "  --cam-offsets-ms LIST  each camera's clock offset, unknown to the estimators:\n"
+            "                   true capture time = stamp + offset (e.g. 0,12,-25,40,0,0)\n"
+            "  --jitter-ms S    sigma of a Gaussian capture-time noise per camera frame, not in\n"
+            "                   the stamps\n"
+            "  --cam-fps LIST   each camera's frame rate (0: the rig's 30); frame sets come at\n"
+            "                   the fastest camera's rate, a camera without a new frame since the\n"
+            "                   previous set has none in it (e.g. 30,25,15,30,25,15)\n"
+            "  --cam-phase-ms LIST  each camera's first stamp, 0..1000 (known: in the stamps)\n"
+            "  --max-rot DEG    with --motion turn/pitch/smooth: exit status 1 if a method's\n"
+            "                   largest rotation error (rot_max) or a lost frame exceeds DEG /\n"
+            "                   occurs\n"
             "  --trace R|all    one line per frame of run R (or of every run) on stderr: the\n"
             "                   turn's angle and the true beta (deg), per method its status,\n"
             "                   geodesic rotation error (deg) and |tx| (m)\n"
@@ -370,6 +395,41 @@ static int parse_double(const char *s, double lo, double hi, double *out)
     }
     *out = v;
     return 0;
+}
+
+/* A comma-separated list of 1..RP_SIM_NCAMS numbers in lo..hi into out (the rest 0). */
+static int parse_cam_list(const char *s, double lo, double hi, double out[RP_SIM_NCAMS])
+{
+    if (!s || !*s) {
+        return -1;
+    }
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        out[k] = 0.0;
+    }
+    for (int k = 0;; ++k) {
+        char *end;
+        if (k == RP_SIM_NCAMS) {
+            return -1;
+        }
+        errno = 0;
+        const double v = strtod(s, &end);
+        if (errno || end == s || (*end != ',' && *end != '\0') || !(v >= lo && v <= hi)) {
+            return -1;
+        }
+        out[k] = v;
+        if (*end == '\0') {
+            return 0;
+        }
+        s = end + 1;
+    }
+}
+
+static const char *motion_name(rp_sim_motion_t m)
+{
+    return m == RP_SIM_MOTION_TURN     ? "turn"
+           : m == RP_SIM_MOTION_PITCH  ? "pitch"
+           : m == RP_SIM_MOTION_SMOOTH ? "smooth"
+                                       : "paper";
 }
 
 static int parse_methods(const char *list, opts_t *o)
@@ -497,11 +557,24 @@ static int parse_args(int argc, char **argv, opts_t *o)
             o->trace_run = (val && strcmp(val, "all") == 0) ? -2 : (int64_t)tr;
         } else if (strcmp(name, "--motion") == 0) {
             bad = !val || (strcmp(val, "paper") != 0 && strcmp(val, "turn") != 0 &&
-                           strcmp(val, "pitch") != 0);
-            o->motion = !val                       ? RP_SIM_MOTION_PAPER
-                        : strcmp(val, "turn") == 0  ? RP_SIM_MOTION_TURN
-                        : strcmp(val, "pitch") == 0 ? RP_SIM_MOTION_PITCH
-                                                    : RP_SIM_MOTION_PAPER;
+                           strcmp(val, "pitch") != 0 && strcmp(val, "smooth") != 0);
+            o->motion = !val                        ? RP_SIM_MOTION_PAPER
+                        : strcmp(val, "turn") == 0   ? RP_SIM_MOTION_TURN
+                        : strcmp(val, "pitch") == 0  ? RP_SIM_MOTION_PITCH
+                        : strcmp(val, "smooth") == 0 ? RP_SIM_MOTION_SMOOTH
+                                                     : RP_SIM_MOTION_PAPER;
+        } else if (strcmp(name, "--cam-offsets-ms") == 0) {
+            bad = parse_cam_list(val, -1000.0, 1000.0, o->cam_offset_ms);
+            o->clocks_given = 1;
+        } else if (strcmp(name, "--cam-phase-ms") == 0) {
+            bad = parse_cam_list(val, 0.0, 1000.0, o->cam_phase_ms);
+            o->clocks_given = 1;
+        } else if (strcmp(name, "--cam-fps") == 0) {
+            bad = parse_cam_list(val, 0.0, 1000.0, o->cam_fps);
+            o->clocks_given = 1;
+        } else if (strcmp(name, "--jitter-ms") == 0) {
+            bad = parse_double(val, 0.0, 100.0, &o->jitter_ms);
+            o->clocks_given = 1;
         } else if (strcmp(name, "--seed") == 0) {
             bad = parse_u64(val, &o->seed);
         } else if (strcmp(name, "--focal-px") == 0) {
@@ -523,10 +596,16 @@ static int parse_args(int argc, char **argv, opts_t *o)
         }
     }
     if (o->max_rot > 0.0 && o->motion == RP_SIM_MOTION_PAPER) {
-        fprintf(stderr, "rigpose-sim: --max-rot needs --motion turn or pitch\n");
+        fprintf(stderr, "rigpose-sim: --max-rot needs --motion turn, pitch or smooth\n");
         return -1;
     }
-    if (o->motion != RP_SIM_MOTION_PAPER && !o->frames_given) {
+    if (o->clocks_given && o->motion == RP_SIM_MOTION_PAPER) {
+        fprintf(stderr, "rigpose-sim: camera clocks need a motion with a pose at every time: "
+                        "--motion turn, pitch or smooth\n");
+        return -1;
+    }
+    if ((o->motion == RP_SIM_MOTION_TURN || o->motion == RP_SIM_MOTION_PITCH) &&
+        !o->frames_given) {
         o->frames = RP_SIM_TURN_FRAMES;
     }
     if (o->layout_study) {
@@ -639,7 +718,7 @@ static void *worker(void *arg)
         }
         rp_sim_run_t sr;
         if (rp_sim_run_init(&sr, &job->cfg, o->seed, r) != 0) {
-            job_fail(job, "out of memory%s%s", "", "");
+            job_fail(job, "out of memory%s%s", "", ""); /* the clocks were checked in main */
             break;
         }
         for (unsigned m = 0; ok && m < o->n_methods; ++m) {
@@ -655,7 +734,7 @@ static void *worker(void *arg)
             const double *truth = &sr.truth[6u * j];
             const double *truth_R = &sr.truth_R[9u * j];
             /* the turn's angle (yaw, or pitch), wrapped; near +-90 degrees: the crossings */
-            const double yaw = wrap_angle(rp_sim_turn_yaw(&sr, j * job->cfg.frame_dt));
+            const double yaw = wrap_angle(rp_sim_turn_yaw(&sr, rp_sim_set_time(&sr, j)));
             const int near90 = o->motion != RP_SIM_MOTION_PAPER &&
                                fabs(fabs(yaw) - 0.5 * SIM_PI) < 10.0 * SIM_PI / 180.0;
             char trace[2048];
@@ -807,7 +886,20 @@ static void print_json(const opts_t *o, const summary_t *s)
            "\"noise_px\": %.6g, ",
            o->runs, o->frames, (unsigned long long)o->seed, o->focal_px, o->noise_px);
     if (o->motion != RP_SIM_MOTION_PAPER) {
-        printf("\"motion\": \"%s\", ", o->motion == RP_SIM_MOTION_TURN ? "turn" : "pitch");
+        printf("\"motion\": \"%s\", ", motion_name(o->motion));
+    }
+    if (o->clocks_given) {
+        const struct { const char *key; const double *v; } lists[] = {
+            {"cam_offsets_ms", o->cam_offset_ms}, {"cam_phase_ms", o->cam_phase_ms},
+            {"cam_fps", o->cam_fps}};
+        for (size_t l = 0; l < sizeof lists / sizeof lists[0]; ++l) {
+            printf("\"%s\": [", lists[l].key);
+            for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+                printf("%s%.6g", k ? ", " : "", lists[l].v[k]);
+            }
+            printf("], ");
+        }
+        printf("\"jitter_ms\": %.6g, ", o->jitter_ms);
     }
     printf("\"rows\": [");
     for (unsigned m = 0; m < o->n_methods; ++m) {
@@ -819,10 +911,16 @@ static void print_json(const opts_t *o, const summary_t *s)
         printf("\"lost_frames\": %llu, ", (unsigned long long)s[m].lost);
         if (o->motion != RP_SIM_MOTION_PAPER) {
             json_num("rot", s[m].rot, 1);
-            json_num("rot90", s[m].rot90, 1);
-            json_num("rot_max", s[m].rot_max, 1);
-            printf("\"lost_runs\": %u, \"lost90\": %llu, \"frames90\": %llu, ", s[m].lost_runs,
-                   (unsigned long long)s[m].lost90, (unsigned long long)s[m].n90);
+            if (o->motion == RP_SIM_MOTION_SMOOTH) {
+                json_num("rot_max", s[m].rot_max, 1);
+                printf("\"lost_runs\": %u, ", s[m].lost_runs);
+            } else {
+                json_num("rot90", s[m].rot90, 1);
+                json_num("rot_max", s[m].rot_max, 1);
+                printf("\"lost_runs\": %u, \"lost90\": %llu, \"frames90\": %llu, ",
+                       s[m].lost_runs, (unsigned long long)s[m].lost90,
+                       (unsigned long long)s[m].n90);
+            }
         }
         json_num("worst_run_tx", s[m].worst_run[0], 1);
         json_num("median_run_tx", s[m].median_run[0], 1);
@@ -850,11 +948,36 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
            o->runs, o->frames, (unsigned long long)o->seed, o->threads,
            o->threads == 1 ? "" : "s", cfg->width, cfg->height, o->focal_px, cfg->n_points,
            cfg->r_in, cfg->r_out, o->noise_px, o->frames - 1);
-    if (o->motion != RP_SIM_MOTION_PAPER) {
+    if (o->motion == RP_SIM_MOTION_TURN || o->motion == RP_SIM_MOTION_PITCH) {
         printf("  motion: a %s, %.3g rad/frame plus a smooth wobble (rp_sim.h); the "
                "paper's row is for its own motion\n\n",
                o->motion == RP_SIM_MOTION_TURN ? "turn (yaw)" : "pitch (the turn's control)",
                cfg->turn_rate * cfg->frame_dt);
+    }
+    if (o->motion == RP_SIM_MOTION_SMOOTH) {
+        printf("  motion: smooth, three sinusoids per axis, |v| <= %g m/s per axis and |rate| <= "
+               "%g rad/s per angle\n  (peaks about 0.5 m/s and 1 rad/s; rp_sim.h); the paper's "
+               "row is for its own motion\n\n",
+               cfg->smooth_v_axis, cfg->smooth_w_axis);
+    }
+    if (o->clocks_given) {
+        static const char *const cam_name[RP_SIM_NCAMS] = {"cam1", "cam2", "cam3", "cam4",
+                                                            "cam1b", "cam3b"};
+        double fps[RP_SIM_NCAMS];
+        printf("  camera clocks (rp_sim.h; the estimators get the stamps only, not the offsets "
+               "or the jitter):\n  %-22s", "");
+        for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+            printf("%10s", cam_name[k]);
+            fps[k] = o->cam_fps[k] > 0.0 ? o->cam_fps[k] : 1.0 / cfg->frame_dt;
+        }
+        printf("\n");
+        print_cols("offset (ms, unknown)", o->cam_offset_ms, "%10.3f");
+        printf("\n");
+        print_cols("phase (ms, stamped)", o->cam_phase_ms, "%10.3f");
+        printf("\n");
+        print_cols("frame rate (Hz)", fps, "%10.3f");
+        printf("\n  capture-time jitter: Gaussian, sigma %g ms per camera frame (unknown); "
+               "frame sets at the fastest camera's rate\n\n", o->jitter_ms);
     }
     if (o->ekf_iterations || o->no_refine) {
         printf("  ablation: EKF iterations %u, structure refinement %s\n\n",
@@ -887,7 +1010,10 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
         printf("\n");
         print_cols("per-run mean, worst", s[m].worst_run, "%10.6f");
         printf("  (worst tx: run %u)\n", s[m].worst_run_tx);
-        if (o->motion != RP_SIM_MOTION_PAPER) {
+        if (o->motion == RP_SIM_MOTION_SMOOTH) {
+            printf("  %-22s%10.6f%10.6f  (rad; %u of %u runs lost frames)\n", "rotation: all, max",
+                   s[m].rot, s[m].rot_max, s[m].lost_runs, o->runs);
+        } else if (o->motion != RP_SIM_MOTION_PAPER) {
             printf("  %-22s%10.6f%10.6f%10.6f  (rad; %u of %u runs lost frames; %llu of the "
                    "%llu frames near yaw +-90 lost)\n",
                    "rotation: all, yaw+-90, max", s[m].rot, s[m].rot90, s[m].rot_max,
@@ -1139,6 +1265,24 @@ int main(int argc, char **argv)
     cfg.noise_px = o.noise_px;
     cfg.n_frames = o.frames;
     cfg.motion = o.motion;
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        cfg.cam_offset_s[k] = o.cam_offset_ms[k] * 1e-3;
+        cfg.cam_phase_s[k] = o.cam_phase_ms[k] * 1e-3;
+        cfg.cam_fps[k] = o.cam_fps[k];
+    }
+    cfg.jitter_s = o.jitter_ms * 1e-3;
+    if (o.clocks_given) {
+        rp_sim_run_t probe; /* the clocks are checked here, once, not in the workers */
+        const int st = rp_sim_run_init(&probe, &cfg, o.seed, 0);
+        rp_sim_run_free(&probe);
+        if (st != 0) {
+            fprintf(stderr, "rigpose-sim: %s\n", st == -2 ? "these camera clocks cannot be "
+                    "simulated: rates 0..1000 Hz, each camera at the fastest one's rate or at "
+                    "least 2 us a frame slower, phases 0..1000 ms, offsets within 1000 ms, jitter "
+                    "up to 100 ms (rp_sim.h)" : "out of memory");
+            return 2;
+        }
+    }
     run_result_t *res = calloc((size_t)o.n_methods * o.runs, sizeof *res);
     double *scratch = malloc((size_t)o.runs * sizeof *scratch);
     summary_t *sum = calloc(o.n_methods, sizeof *sum);
@@ -1168,7 +1312,7 @@ int main(int argc, char **argv)
                     fprintf(stderr, "rigpose-sim: %s does not hold through the %s: largest "
                             "rotation error %.3f deg (bound %.3f), %llu lost frames\n",
                             rp_pipe_layout_name(o.m[m]->layout),
-                            o.motion == RP_SIM_MOTION_TURN ? "turn" : "pitch",
+                            motion_name(o.motion),
                             sum[m].rot_max * 180.0 / SIM_PI, o.max_rot * 180.0 / SIM_PI,
                             (unsigned long long)sum[m].lost);
                     rc = 1;

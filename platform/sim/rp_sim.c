@@ -22,7 +22,7 @@ _Static_assert(RP_MAX_CAMS >= RP_SIM_NCAMS, "the protocol's rig needs 6 cameras"
 #define SIM_PI 3.14159265358979323846
 
 /* Stream domains: keep the point cloud, the trajectory and the noise independent. */
-enum { DOM_POINTS = 1, DOM_TRAJ = 2, DOM_NOISE = 3, DOM_TURN = 4 };
+enum { DOM_POINTS = 1, DOM_TRAJ = 2, DOM_NOISE = 3, DOM_TURN = 4, DOM_SMOOTH = 5, DOM_CLOCK = 6 };
 
 /* ---- random numbers ------------------------------------------------------------------------ */
 
@@ -146,6 +146,8 @@ void rp_sim_default_cfg(rp_sim_cfg_t *cfg)
     cfg->turn_ramp_s = 1.0 / 3.0;
     cfg->wobble_t = 0.03;
     cfg->wobble_a = 0.05;
+    cfg->smooth_v_axis = 0.4;
+    cfg->smooth_w_axis = 0.8;
 }
 
 rp_vo_gc_cfg_t rp_sim_gc_cfg(const rp_sim_cfg_t *cfg)
@@ -262,6 +264,43 @@ static void store_truth(rp_sim_run_t *sr, uint32_t j, const double R[9], const d
 
 /* ---- a run: points and trajectory ---------------------------------------------------------- */
 
+/* The clocks of cfg into sr (rp_sim.h). Returns 0, or -2 for clocks it cannot simulate. */
+static int clocks_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg)
+{
+    int any = cfg->jitter_s != 0.0;
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        any |= cfg->cam_offset_s[k] != 0.0 || cfg->cam_phase_s[k] != 0.0 || cfg->cam_fps[k] != 0.0;
+    }
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        const double fps = cfg->cam_fps[k];
+        if (!(fps >= 0.0 && fps <= 1000.0) || !(cfg->cam_phase_s[k] >= 0.0) ||
+            !(cfg->cam_phase_s[k] <= 1.0) || !(fabs(cfg->cam_offset_s[k]) <= 1.0)) {
+            return -2;
+        }
+        sr->cam_period_s[k] = fps > 0.0 ? 1.0 / fps : cfg->frame_dt;
+        sr->cam_phase_us[k] = (int64_t)llround(cfg->cam_phase_s[k] * 1e6);
+        if (sr->cam_period_s[k] < sr->cam_period_s[sr->set_cam]) {
+            sr->set_cam = k;
+        }
+    }
+    if (!(cfg->jitter_s >= 0.0 && cfg->jitter_s <= 0.1) || !(cfg->frame_dt > 0.0)) {
+        return -2;
+    }
+    /* Slower cameras: at least 2 us a frame slower, so that the stamps' rounding (+-0.5 us
+     * each) never puts two of their frames between two sets'. */
+    const double pf = sr->cam_period_s[sr->set_cam];
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        if (sr->cam_period_s[k] != pf && sr->cam_period_s[k] < pf + 2e-6) {
+            return -2;
+        }
+    }
+    if (any && cfg->motion == RP_SIM_MOTION_PAPER) {
+        return -2; /* the random walk has no pose between frames */
+    }
+    sr->clocked = any;
+    return 0;
+}
+
 int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, uint32_t run)
 {
     memset(sr, 0, sizeof *sr);
@@ -269,6 +308,9 @@ int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, ui
     sr->seed = seed;
     sr->run = run;
     rp_sim_make_rig(cfg, &sr->rig);
+    if (clocks_init(sr, cfg) != 0) {
+        return -2;
+    }
 
     const size_t nf = cfg->n_frames ? cfg->n_frames : 1u;
     sr->points = malloc((size_t)cfg->n_points * 3u * sizeof(double) + 1u);
@@ -308,7 +350,29 @@ int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, ui
         }
         for (uint32_t j = 0; j < cfg->n_frames; ++j) {
             double R[9], d[3];
-            rp_sim_turn_pose(sr, (double)j * cfg->frame_dt, d, R);
+            rp_sim_turn_pose(sr, rp_sim_set_time(sr, j), d, R);
+            store_truth(sr, j, R, d);
+        }
+        return 0;
+    }
+
+    if (cfg->motion == RP_SIM_MOTION_SMOOTH) {
+        /* Three sinusoids per degree of freedom (rp_sim.h), each a third of the axis's rate
+         * bound: A w = bound / 3. */
+        rp_rng_seed(&rng, sim_key(seed, run, DOM_SMOOTH, 0));
+        for (int q = 0; q < 6; ++q) {
+            for (int h = 0; h < 3; ++h) {
+                const double period = 1.0 + (q < 3 ? 1.0 : 3.0) * rp_rng_uniform(&rng); /* s */
+                const double w = 2.0 * SIM_PI / period;
+                sr->smooth[q][h][0] = (q < 3 ? cfg->smooth_v_axis : cfg->smooth_w_axis) / (3.0 * w);
+                sr->smooth[q][h][1] = w;
+                sr->smooth[q][h][2] = 2.0 * SIM_PI * rp_rng_uniform(&rng);
+            }
+        }
+        for (uint32_t j = 0; j < cfg->n_frames; ++j) {
+            double R[9], d[3];
+            /* ignored: 0 for a continuous motion */
+            (void)rp_sim_pose(sr, rp_sim_set_time(sr, j), d, R);
             store_truth(sr, j, R, d);
         }
         return 0;
@@ -358,8 +422,39 @@ double rp_sim_turn_yaw(const rp_sim_run_t *sr, double t)
     return sr->turn_sign * psi;
 }
 
+/* The smooth motion's pose at t (rp_sim.h). */
+static void smooth_pose(const rp_sim_run_t *sr, double t, double d[3], double R[9])
+{
+    double w[6];
+    for (int q = 0; q < 6; ++q) {
+        w[q] = 0.0;
+        for (int h = 0; h < 3; ++h) {
+            const double *p = sr->smooth[q][h];
+            w[q] += p[0] * (sin(p[1] * t + p[2]) - sin(p[2]));
+        }
+    }
+    rot_from_angles(w[3], w[4], w[5], R);
+    d[0] = w[0];
+    d[1] = w[1];
+    d[2] = w[2];
+}
+
+int rp_sim_pose(const rp_sim_run_t *sr, double t, double d[3], double R[9])
+{
+    if (sr->cfg.motion == RP_SIM_MOTION_SMOOTH) {
+        smooth_pose(sr, t, d, R);
+        return 0;
+    }
+    rp_sim_turn_pose(sr, t, d, R);
+    return sr->cfg.motion == RP_SIM_MOTION_PAPER ? -1 : 0;
+}
+
 void rp_sim_turn_pose(const rp_sim_run_t *sr, double t, double d[3], double R[9])
 {
+    if (sr->cfg.motion == RP_SIM_MOTION_SMOOTH) {
+        smooth_pose(sr, t, d, R);
+        return;
+    }
     double w[6];
     for (int q = 0; q < 6; ++q) {
         w[q] = 0.0;
@@ -380,6 +475,61 @@ void rp_sim_turn_pose(const rp_sim_run_t *sr, double t, double d[3], double R[9]
     d[0] = w[0];
     d[1] = w[1];
     d[2] = w[2];
+}
+
+/* ---- clocks -------------------------------------------------------------------------------- */
+
+/* Camera k's stamp of its frame i (us; i may be negative: the frame before the first set). */
+static int64_t cam_stamp_us(const rp_sim_run_t *sr, int k, int64_t i)
+{
+    return sr->cam_phase_us[k] + (int64_t)llround((double)i * sr->cam_period_s[k] * 1e6);
+}
+
+double rp_sim_set_time(const rp_sim_run_t *sr, uint32_t j)
+{
+    const int f = sr->set_cam;
+    return (double)sr->cam_phase_us[f] * 1e-6 + (double)j * sr->cam_period_s[f];
+}
+
+int64_t rp_sim_set_utime(const rp_sim_run_t *sr, uint32_t j)
+{
+    return cam_stamp_us(sr, sr->set_cam, (int64_t)j);
+}
+
+void rp_sim_cam_frame(const rp_sim_run_t *sr, uint32_t j, int k, rp_sim_cam_frame_t *cf)
+{
+    memset(cf, 0, sizeof *cf);
+    if (!sr->clocked) {
+        cf->present = 1;
+        cf->index = j;
+        cf->stamp_us = rp_sim_set_utime(sr, j);
+        cf->t_true = rp_sim_set_time(sr, j);
+        return;
+    }
+    const int64_t ut = rp_sim_set_utime(sr, j);
+    const int64_t prev = cam_stamp_us(sr, sr->set_cam, (int64_t)j - 1);
+    /* The camera's latest frame stamped at or before ut (floor, then fixed for the rounding). */
+    int64_t i = (int64_t)floor((double)(ut - sr->cam_phase_us[k]) * 1e-6 / sr->cam_period_s[k]);
+    while (cam_stamp_us(sr, k, i + 1) <= ut) {
+        ++i;
+    }
+    while (i >= 0 && cam_stamp_us(sr, k, i) > ut) {
+        --i;
+    }
+    if (i < 0 || cam_stamp_us(sr, k, i) <= prev) {
+        return; /* not started yet, or no new frame since the previous set */
+    }
+    cf->present = 1;
+    cf->index = i;
+    cf->stamp_us = cam_stamp_us(sr, k, i);
+    double e = 0.0;
+    if (sr->cfg.jitter_s > 0.0) {
+        rp_rng_t rng;
+        rp_rng_seed(&rng, sim_key(sr->seed, sr->run, DOM_CLOCK, ((uint64_t)k << 56) ^ (uint64_t)i));
+        e = sr->cfg.jitter_s * rp_rng_gauss(&rng);
+    }
+    cf->t_true = (double)sr->cam_phase_us[k] * 1e-6 + (double)i * sr->cam_period_s[k] +
+                 sr->cfg.cam_offset_s[k] + e;
 }
 
 void rp_sim_run_free(rp_sim_run_t *sr)
@@ -435,16 +585,30 @@ uint32_t rp_sim_frame(const rp_sim_run_t *sr, uint32_t j, rp_frameset_t *fs)
     const rp_sim_cfg_t *cfg = &sr->cfg;
     const double *Rj = &sr->truth_R[9u * j];
     const double *dj = &sr->truth[6u * j];
+    double R_cam[9], d_cam[3]; /* with clocks: the pose at the camera's own capture time */
     const double w_max = cfg->width - 0.5, h_max = cfg->height - 0.5; /* rp_cam_in_image */
     const uint64_t frame_key = sim_key(sr->seed, sr->run, DOM_NOISE, j);
     static const uint32_t cap = RP_MAX_FEATS_PER_CAM;
     cand_t heap[RP_MAX_FEATS_PER_CAM];
     uint32_t total = 0;
 
-    rp_frameset_reset(fs, (int64_t)llround((double)j * cfg->frame_dt * 1e6));
+    rp_frameset_reset(fs, rp_sim_set_utime(sr, j));
 
     for (int k = 0; k < RP_SIM_NCAMS; ++k) {
         const rp_rig_cam_t *rc = &sr->rig.cam[k];
+        if (sr->clocked) {
+            rp_sim_cam_frame_t cf;
+            rp_sim_cam_frame(sr, j, k, &cf);
+            if (!cf.present) {
+                fs->cam_flags[k] |= RP_FS_NO_IMAGE;
+                continue;
+            }
+            fs->cam_dt_us[k] = (int32_t)(cf.stamp_us - fs->utime);
+            /* ignored: 0, rp_sim_run_init refuses clocks with the paper's motion */
+            (void)rp_sim_pose(sr, cf.t_true, d_cam, R_cam);
+            Rj = R_cam;
+            dj = d_cam;
+        }
         const double fx = (double)rc->cam.fx, fy = (double)rc->cam.fy;
         const double cx = (double)rc->cam.cx, cy = (double)rc->cam.cy;
         const double u_lo = -1.5 - cx, u_hi = w_max + 1.0 - cx; /* pre-test bounds, pixels */

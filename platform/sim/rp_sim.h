@@ -16,7 +16,29 @@
  * least min_depth in front and projects inside the image. Pixel noise: Gaussian, noise_px.
  * Everything is a function of (seed, run index): runs can be computed in any order.
  * cfg.motion = RP_SIM_MOTION_TURN replaces that random walk with a turn (rp_sim_turn_pose): a
- * smooth function of time, sampled at j * frame_dt, in the same scene and with the same noise.
+ * smooth function of time, sampled at j * frame_dt, in the same scene and with the same noise;
+ * RP_SIM_MOTION_SMOOTH with a smooth wander (sums of sinusoids, below).
+ *
+ * Camera clocks (cam_offset_s, cam_phase_s, cam_fps, jitter_s; all zero by default: every camera
+ * captures at the set's time, and the frame sets are the synchronised ones, bit for bit). Camera
+ * k free-runs at its own rate: its frame i (i = 0, 1, ...) carries the stamp
+ *     stamp_us(k, i) = round(1e6 cam_phase_s[k]) + round(1e6 i P_k),  P_k = 1 / cam_fps[k]
+ * (P_k = frame_dt when cam_fps[k] is 0), and was really captured at
+ *     t_true(k, i) = 1e-6 round(1e6 cam_phase_s[k]) + i P_k + cam_offset_s[k] + e(k, i)  (s),
+ * i.e. true capture time = stamp + offset + jitter (up to the stamp's rounding to 1 us). The
+ * offset is the camera's clock error, unknown to the estimators (they estimate it relative to
+ * cam1's; the tools keep cam1's at 0); e(k, i) ~ N(0, jitter_s^2) is unknown noise, a function of
+ * (seed, run, k, i). The phase is known: it is in the stamps. Frame sets come at the rate of the
+ * fastest camera (the smallest P_k; the lowest index among equals), set j being that camera's
+ * frame j: utime_j = its stamp. Camera k is in set j when it has a frame stamped in
+ * (utime_{j-1}, utime_j] (its latest): its features, cam_dt_us[k] = stamp - utime_j (<= 0); else
+ * n[k] = 0 and RP_FS_NO_IMAGE. A camera at the fastest rate or slower (P_k = P_f, or
+ * P_k >= P_f + 2 us, which rp_sim_run_init enforces) has at most one frame per set, so each of
+ * its frames stamped after utime_{-1} is in exactly one set. A camera's features are the
+ * projection of the true pose at ITS t_true; the truth arrays (what the tools score against)
+ * are the pose at the set's time t_j = 1e-6 round(1e6 phase_f) + j P_f, and utime_j is t_j
+ * rounded to 1 us. Clocks need a continuous motion (turn, pitch, smooth): the paper's random
+ * walk has no pose between frames.
  * cam2's and cam4's placements (position and yaw) are configurable (cfg.cam2, cfg.cam4) for
  * the layout study (rp_sim_layout.h); the defaults are the paper's, above.
  */
@@ -65,6 +87,18 @@ typedef enum {
      * a pitch through the same angles at the same rates, where the paper's angles are not
      * singular (beta stays near 0): the control for what the turn's beta = +-90 costs. */
     RP_SIM_MOTION_PITCH = 2,
+    /* A smooth wander for the unsynchronised cameras (every time has a pose, and the motion is
+     * quick enough for clock offsets to matter): per translation axis (world) and per angle
+     * (R = Rz(g) Ry(b) Rx(a), as the paper's) the sum of three sinusoids, periods U[1, 2] s
+     * (translation) and U[1, 4] s (angles), random phases, minus their value at t = 0 (the pose
+     * at t = 0 is the identity). Each sinusoid's rate amplitude A w is a third of smooth_v_axis
+     * (m/s) or smooth_w_axis (rad/s): per axis |v| <= 0.4 m/s, per angle |rate| <= 0.8 rad/s by
+     * default, so |v| <= 0.69 m/s; the peaks actually reached in 300 frames are about 0.5 m/s
+     * and 1 rad/s (0.43-0.54 m/s, 0.80-1.19 rad/s over seeds 1-8, test_simclock.c). The
+     * displacement per axis is at most 2 sum A <= 2 (v_axis / 3) sum 1 / w <= 0.255 m, so
+     * |d| <= 0.441 m and the farthest camera (0.141 m from cam1) stays 0.08 m inside r_in; the
+     * angles stay within 1.02 rad (beta far from +-pi/2). */
+    RP_SIM_MOTION_SMOOTH = 3,
 } rp_sim_motion_t;
 
 typedef struct {
@@ -85,6 +119,13 @@ typedef struct {
     double turn_ramp_s;    /* s, 1/3 (turn only) */
     double wobble_t;       /* m, 0.03 (turn only) */
     double wobble_a;       /* rad, 0.05 (turn only) */
+    double smooth_v_axis;  /* m/s, 0.4 (smooth only): per world axis, the speed bound */
+    double smooth_w_axis;  /* rad/s, 0.8 (smooth only): per angle, the rate bound */
+    /* Camera clocks (above), per camera in RP_SIM_CAM1.. order; all 0: synchronised. */
+    double cam_offset_s[RP_SIM_NCAMS]; /* s, true capture time minus stamp (unknown) */
+    double cam_phase_s[RP_SIM_NCAMS];  /* s, 0..1: stamp of the camera's frame 0 (known) */
+    double cam_fps[RP_SIM_NCAMS];      /* Hz, its frame rate; 0: 1 / frame_dt */
+    double jitter_s;                   /* s, sigma of the Gaussian capture-time noise */
 } rp_sim_cfg_t;
 
 /* The number of frames a turn run takes by default in the tools: 200 (one full turn at the
@@ -128,18 +169,48 @@ typedef struct {
      * phase. */
     double turn_sign;
     double wob[6][2][3];
+    /* The smooth motion's (motion smooth only): per degree of freedom three sinusoids'
+     * amplitude (m or rad), angular rate (rad/s) and phase. */
+    double smooth[6][3][3];
+    /* The clocks (from cfg): 1 if any is set; per camera the period P_k (s) and the stamp of
+     * frame 0 (us); the camera whose frames make the sets. */
+    int clocked;
+    double cam_period_s[RP_SIM_NCAMS];
+    int64_t cam_phase_us[RP_SIM_NCAMS];
+    int set_cam;
 } rp_sim_run_t;
 
 /* Make run `run` of the experiment seeded by `seed`: the point cloud and the trajectory.
- * Returns 0, or -1 if memory ran out. */
+ * Returns 0; -1 if memory ran out; -2 for clocks that cannot be simulated: any with the paper's
+ * motion, a rate < 0 or > 1000 Hz, a phase outside 0..1 s, |offset| > 1 s, jitter outside
+ * 0..0.1 s, or a camera slower than the fastest by less than 2 us a frame (see above). */
 int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, uint32_t run);
 void rp_sim_run_free(rp_sim_run_t *sr);
 
-/* The turn's pose at time t (s, any real t >= 0, not only frame times) of a run made with
- * motion turn (or pitch): cam1's position d (world, m) and orientation R (row-major, cam1 to world).
- * Frame j's truth is this at t = j * frame_dt. For runs of the paper's motion it gives the
- * identity. */
+/* The pose at time t (s, any real t, not only frame times) of a run made with a continuous
+ * motion (turn, pitch, smooth): cam1's position d (world, m) and orientation R (row-major, cam1
+ * to world). Set j's truth is this at the set's time (j * frame_dt without clocks). Returns 0;
+ * -1 for the paper's motion, which has no pose between frames (d, R: the identity). */
+int rp_sim_pose(const rp_sim_run_t *sr, double t, double d[3], double R[9]);
+
+/* rp_sim_pose by its older name (the turn's callers), the status dropped. */
 void rp_sim_turn_pose(const rp_sim_run_t *sr, double t, double d[3], double R[9]);
+
+/* Camera k's frame in set j (the clocks above). */
+typedef struct {
+    int present;      /* 1: the camera has a frame in the set, else RP_FS_NO_IMAGE */
+    int64_t index;    /* its frame number i (the camera's own count from 0); present only */
+    int64_t stamp_us; /* its stamp: utime + cam_dt_us of the set; present only */
+    double t_true;    /* s, when it was really captured (stamp + offset + jitter); present
+                       * only */
+} rp_sim_cam_frame_t;
+
+/* Set j's time (s; its truth's) and stamp (us: the frame set's utime). */
+double rp_sim_set_time(const rp_sim_run_t *sr, uint32_t j);
+int64_t rp_sim_set_utime(const rp_sim_run_t *sr, uint32_t j);
+
+/* Camera k's frame in set j, as rp_sim_frame makes it. */
+void rp_sim_cam_frame(const rp_sim_run_t *sr, uint32_t j, int k, rp_sim_cam_frame_t *cf);
 
 /* The turn's angle psi(t) alone (rad, unwrapped; without the wobble's part); 0 for the
  * paper's motion. */
@@ -148,7 +219,9 @@ double rp_sim_turn_yaw(const rp_sim_run_t *sr, double t);
 /* The noisy features of frame j in all six cameras (ids = point index; the same point carries
  * the same id in every camera that sees it). The noise is a function of (seed, run, j) only.
  * A camera that sees more than RP_MAX_FEATS_PER_CAM points keeps the nearest ones.
- * utime = j * frame_dt. Returns the total feature count. */
+ * utime = j * frame_dt, rounded to 1 us. With clocks: utime = rp_sim_set_utime, each camera's
+ * features from the pose at its own t_true, cam_dt_us and RP_FS_NO_IMAGE as rp_sim_cam_frame
+ * says. Returns the total feature count. */
 uint32_t rp_sim_frame(const rp_sim_run_t *sr, uint32_t j, rp_frameset_t *fs);
 
 /* Deterministic generator used by the simulation (splitmix64 seeding xoshiro256**). */

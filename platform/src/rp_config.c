@@ -722,12 +722,16 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     cfg->sim.frames = (uint32_t)frames;
     cfg->sim.drop_cam = (int16_t)drop_cam;
     cfg->sim.drop_from = (uint32_t)drop_from;
-    if (strcmp(motion, "paper") == 0 || strcmp(motion, "turn") == 0 ||
-        strcmp(motion, "pitch") == 0) {
-        cfg->sim.motion = (int8_t)(motion[0] == 'p' ? (motion[1] == 'a' ? 0 : 2) : 1);
-    } else {
+    static const char *const motions[] = {"paper", "turn", "pitch", "smooth"}; /* rp_sim.h */
+    cfg->sim.motion = -1;
+    for (int8_t mi = 0; mi < (int8_t)(sizeof motions / sizeof motions[0]); ++mi) {
+        if (strcmp(motion, motions[mi]) == 0) {
+            cfg->sim.motion = mi;
+        }
+    }
+    if (cfg->sim.motion < 0) {
         return fail(c, RP_CFG_E_RANGE, map_get(c, sm, "motion"), "source.sim.motion",
-                    "'%s' is not one of paper, turn, pitch", motion);
+                    "'%s' is not one of paper, turn, pitch, smooth", motion);
     }
     cfg->hal.sim_seed = cfg->sim.seed;
     cfg->hal.sim_frames = cfg->sim.frames;

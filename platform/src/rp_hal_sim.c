@@ -63,9 +63,9 @@ static rp_hal_status_t sim_open(rp_hal_sim_t **sim, const rp_hal_cfg_t *cfg,
         return rp_hal_fail(err, RP_HAL_E_ARG, "sim: drop_cam %d out of -1..%d", (int)o.drop_cam,
                            RP_SIM_NCAMS - 1);
     }
-    if (o.motion < (int8_t)RP_SIM_MOTION_PAPER || o.motion > (int8_t)RP_SIM_MOTION_PITCH) {
-        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: motion %d is not 0 (paper), 1 (turn) or 2 "
-                           "(pitch)", (int)o.motion);
+    if (o.motion < (int8_t)RP_SIM_MOTION_PAPER || o.motion > (int8_t)RP_SIM_MOTION_SMOOTH) {
+        return rp_hal_fail(err, RP_HAL_E_ARG, "sim: motion %d is not 0 (paper), 1 (turn), 2 "
+                           "(pitch) or 3 (smooth)", (int)o.motion);
     }
     if (g_sim.open) {
         return rp_hal_fail(err, RP_HAL_E_ARG, "sim: already open (one source per process)");
@@ -149,8 +149,12 @@ rp_hal_status_t rp_hal_sim_grab(rp_hal_sim_t *sim, rp_hal_set_t *set)
     set->n_cams = RP_SIM_NCAMS;
     for (uint8_t k = 0; k < RP_SIM_NCAMS; ++k) {
         rp_hal_frame_t *f = &set->cam[k];
-        f->utime = t;
+        /* the camera's own stamp, as the simulation gives it (0 without clocks) */
+        f->utime = t + sim->fs.cam_dt_us[k];
         f->seq = j;
+        if (sim->fs.cam_flags[k] & RP_FS_NO_IMAGE) {
+            f->flags = RP_HAL_CAM_MISSING; /* a slower camera without a new frame */
+        }
         if (sim->opts.drop_cam == (int16_t)k && j >= sim->opts.drop_from) {
             sim->fs.n[k] = 0;
             sim->fs.cam_flags[k] |= RP_FS_NO_IMAGE;

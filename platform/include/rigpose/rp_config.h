@@ -67,7 +67,7 @@ typedef struct {
     double noise_px;    /* Gaussian pixel noise, px */
     int16_t drop_cam;   /* camera that vanishes, -1: none */
     uint32_t drop_from; /* from this frame set on */
-    int8_t motion;      /* rp_hal_sim_opts_t.motion: 0 paper, 1 turn, 2 pitch */
+    int8_t motion;      /* rp_hal_sim_opts_t.motion: 0 paper, 1 turn, 2 pitch, 3 smooth */
 } rp_cfg_sim_t;
 
 typedef struct {

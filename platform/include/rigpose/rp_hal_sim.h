@@ -37,8 +37,8 @@ typedef struct rp_hal_sim_opts {
     int16_t drop_cam;   /* rig camera that vanishes, -1: none */
     uint32_t drop_from; /* first frame set without it */
     int8_t motion;      /* rp_sim_motion_t: 0 the paper's random walk (which leaves the scene
-                         * on long runs), 1 the turn on the spot, 2 the pitch (both stay in it
-                         * for any length: soak runs) */
+                         * on long runs), 1 the turn on the spot, 2 the pitch, 3 the smooth
+                         * wander (all three stay in it for any length: soak runs) */
 } rp_hal_sim_opts_t;
 
 /* The protocol's defaults: 0.5 px, no camera dropped, the paper's motion. */
