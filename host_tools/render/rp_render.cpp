@@ -464,7 +464,7 @@ Sequence::Sequence(const SeqCfg &cfg) : cfg_(cfg)
         why_ = "frames >= 1, ss 1..8, face_px 64..8192";
         return;
     }
-    if (cfg.motion < 0 || cfg.motion > 2) {
+    if (cfg.motion < 0 || cfg.motion > 3) {
         why_ = "unknown motion";
         return;
     }
@@ -481,6 +481,10 @@ Sequence::Sequence(const SeqCfg &cfg) : cfg_(cfg)
     sc.height = (uint16_t)cfg.height;
     sc.focal_px = cfg.focal_px > 0.0 ? cfg.focal_px : 800.0 * cfg.width / 640.0;
     sc.n_frames = cfg.frames;
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        sc.cam_offset_s[k] = cfg.cam_offset_s[k];
+    }
+    sc.jitter_s = cfg.jitter_s;
     if (!cfg.points) {
         sc.n_points = 0; /* the shell replaces the point cloud */
     } else if (!(cfg.disc_radius > 0.0 && cfg.disc_radius <= 0.05)) {
@@ -489,13 +493,34 @@ Sequence::Sequence(const SeqCfg &cfg) : cfg_(cfg)
     }
     frame_dt_ = sc.frame_dt;
     rp_sim_run_t sr;
-    if (rp_sim_run_init(&sr, &sc, cfg.seed, cfg.run) != 0) {
-        why_ = "out of memory";
+    const int st = rp_sim_run_init(&sr, &sc, cfg.seed, cfg.run);
+    if (st != 0) {
+        why_ = st == -2 ? "camera clocks need a continuous motion (turn, pitch, smooth), offsets "
+                          "within 1 s, jitter 0..0.1 s"
+                        : "out of memory";
+        return;
+    }
+    if (sr.clocked && cfg.moving_object) {
+        rp_sim_run_free(&sr);
+        why_ = "the moving object is not simulated with camera clocks";
         return;
     }
     rig_ = sr.rig;
     truth_.assign(sr.truth, sr.truth + 6u * cfg.frames);
     truth_R_.assign(sr.truth_R, sr.truth_R + 9u * cfg.frames);
+    if (sr.clocked) {
+        cam_d_.assign(3u * RP_SIM_NCAMS * cfg.frames, 0.0);
+        cam_R_.assign(9u * RP_SIM_NCAMS * cfg.frames, 0.0);
+        for (uint32_t j = 0; j < cfg.frames; ++j) {
+            for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+                rp_sim_cam_frame_t cf; /* every camera at the rig's rate: always present */
+                rp_sim_cam_frame(&sr, j, k, &cf);
+                const size_t i = (size_t)j * RP_SIM_NCAMS + (size_t)k;
+                /* ignored: 0, the clocks were accepted with a continuous motion */
+                (void)rp_sim_pose(&sr, cf.t_true, &cam_d_[3u * i], &cam_R_[9u * i]);
+            }
+        }
+    }
     if (cfg.points) {
         cloud_.assign(sr.points, sr.points + 3u * sc.n_points);
     }
@@ -561,11 +586,23 @@ Pose Sequence::pose(uint32_t j) const
     return p;
 }
 
+Pose Sequence::cam_pose(uint32_t j, int k) const
+{
+    if (cam_d_.empty()) {
+        return pose(j);
+    }
+    Pose p;
+    const size_t i = (size_t)j * RP_SIM_NCAMS + (size_t)k;
+    std::memcpy(p.d, &cam_d_[3u * i], sizeof p.d);
+    std::memcpy(p.R, &cam_R_[9u * i], sizeof p.R);
+    return p;
+}
+
 int64_t Sequence::utime(uint32_t j) const { return (int64_t)std::llround(j * frame_dt_ * 1e6); }
 
 void Sequence::render(uint32_t j, int k, cv::Mat *out8) const
 {
-    const Pose p = pose(j);
+    const Pose p = cam_pose(j, k);
     cv::Mat alb;
     ObjView ov;
     const ObjView *ovp = object_view(j, k, &ov) ? &ov : nullptr;
@@ -587,7 +624,7 @@ bool Sequence::object_view(uint32_t j, int k, ObjView *ov) const
     if (!object_ || j >= cfg_.frames || k < 0 || k >= rig_.n_cams) {
         return false;
     }
-    const Pose p = pose(j);
+    const Pose p = cam_pose(j, k);
     double C[3], M[9];
     cam_in_world(rig_, k, p.d, p.R, C, M);
     const double *oc = &obj_c_[3u * j], *Q = &obj_Q_[9u * j];
@@ -613,7 +650,7 @@ bool Sequence::world_point_at(uint32_t j, int k, const rp_real uv[2], double X[3
         return false;
     }
     /* The pixel's ray in the world: from the camera's centre C along M (xn, 1). */
-    const Pose p = pose(j);
+    const Pose p = cam_pose(j, k);
     double C[3], M[9], dw[3];
     cam_in_world(rig_, k, p.d, p.R, C, M);
     for (int i = 0; i < 3; ++i) {

@@ -30,6 +30,7 @@
 
 #include "rigpose/rp_rig.h"
 #include "rigpose/rp_track.h"
+#include "rp_sim.h"
 #include "../common/rp_cv.hpp"
 #include "rp_noise.hpp"
 
@@ -261,7 +262,13 @@ struct SeqCfg {
     bool points = false;         /* the "points" scene (DiscScene) instead of the shell */
     double disc_radius = 0.012;  /* m, points scene */
     int face_px = 1024;
-    int motion = 0;              /* rp_sim_motion_t: 0 the paper's, 1 turn, 2 pitch (rp_sim.h) */
+    int motion = 0;              /* rp_sim_motion_t: 0 the paper's, 1 turn, 2 pitch, 3 smooth
+                                  * (rp_sim.h) */
+    /* Camera clocks (rp_sim.h; a continuous motion only): per rig camera its unknown offset (s)
+     * and the Gaussian jitter (s) of every capture time. Each image is rendered at its camera's
+     * true capture time (set time + offset + jitter) and stamped with the set's time. */
+    double cam_offset_s[RP_SIM_NCAMS] = {0, 0, 0, 0, 0, 0};
+    double jitter_s = 0.0;
     bool moving_object = false;  /* an independently moving object (MovingObject) */
     int object_cam = 0;          /* the rig camera whose view it covers */
     double object_cover = 0.30;  /* the fraction of that view it covers */
@@ -288,6 +295,10 @@ public:
     /* Truth of frame j: [tx ty tz alpha beta gamma] (as rp_estimate_t.p) and the pose. */
     const double *truth(uint32_t j) const { return &truth_[6u * j]; }
     Pose pose(uint32_t j) const;
+    /* The pose at rig camera k's capture time in frame set j: pose(j) without clocks, else the
+     * pose at the set's time + the camera's offset + its jitter (rp_sim_cam_frame). Images,
+     * world_point_at and the moving object's view use it. */
+    Pose cam_pose(uint32_t j, int k) const;
     int64_t utime(uint32_t j) const;
     /* 8-bit image of rig camera k at frame j, with the configured degradations. */
     void render(uint32_t j, int k, cv::Mat *out8) const;
@@ -302,6 +313,7 @@ private:
     std::string why_;
     rp_rig_t rig_;
     std::vector<double> truth_, truth_R_;
+    std::vector<double> cam_d_, cam_R_; /* with clocks: per set and camera, 3 and 9 (cam_pose) */
     double frame_dt_ = 1.0 / 30.0;
     std::unique_ptr<Scene> scene_;
     std::unique_ptr<DiscScene> discs_;

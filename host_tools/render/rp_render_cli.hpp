@@ -34,7 +34,13 @@ inline void cli_usage(FILE *out)
                  "  --face-px N      texture cube map face side (default 1024)\n"
                  "  --motion M       paper (default): rigpose-sim's run; turn: a turn on the spot,\n"
                  "                   0.035 rad/frame of yaw (use --frames 200 for the full turn);\n"
-                 "                   pitch: the same about cam1's x axis (rp_sim.h)\n"
+                 "                   pitch: the same about cam1's x axis; smooth: a smooth wander,\n"
+                 "                   peaks about 0.5 m/s and 1 rad/s (rp_sim.h)\n"
+                 "  --cam-offsets-ms LIST  per camera (rp_sim.h's order: cam1,cam2,cam3,cam4,\n"
+                 "                   cam1b,cam3b; missing ones 0) its clock offset, unknown to the\n"
+                 "                   estimators: each image is rendered at set time + offset and\n"
+                 "                   stamped with the set's time (turn, pitch or smooth only)\n"
+                 "  --jitter-ms S    Gaussian capture-time noise per image, sigma S ms, not stamped\n"
                  "  --moving-object  add an independently moving textured sphere covering\n"
                  "                   --object-cover of camera --object-cam's view\n"
                  "  --object-cam K   rig camera 0..5 (rp_sim.h's order; default 0 = cam1)\n"
@@ -60,18 +66,44 @@ inline int cli_parse(int argc, char **argv, int i, SeqCfg *cfg)
     }
     if (!std::strcmp(o, "--motion")) {
         const char *v = i + 1 < argc ? argv[i + 1] : "";
-        if (!std::strcmp(v, "paper") || !std::strcmp(v, "turn") || !std::strcmp(v, "pitch")) {
-            cfg->motion = !std::strcmp(v, "paper") ? 0 : !std::strcmp(v, "turn") ? 1 : 2;
-            return 2;
+        static const char *const names[] = {"paper", "turn", "pitch", "smooth"}; /* rp_sim.h */
+        for (int m = 0; m < 4; ++m) {
+            if (!std::strcmp(v, names[m])) {
+                cfg->motion = m;
+                return 2;
+            }
         }
-        std::fprintf(stderr, "bad value for --motion: '%s' (paper, turn or pitch)\n", v);
+        std::fprintf(stderr, "bad value for --motion: '%s' (paper, turn, pitch or smooth)\n", v);
         return -1;
+    }
+    if (!std::strcmp(o, "--cam-offsets-ms")) {
+        const char *p = i + 1 < argc ? argv[i + 1] : "";
+        for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+            cfg->cam_offset_s[k] = 0.0;
+        }
+        for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+            char *end = nullptr;
+            errno = 0;
+            const double ms = std::strtod(p, &end);
+            if (errno || end == p || (*end && *end != ',') || !(std::fabs(ms) <= 1000.0) ||
+                (*end == ',' && k == RP_SIM_NCAMS - 1)) {
+                std::fprintf(stderr, "bad value for --cam-offsets-ms: '%s' (up to %d numbers, "
+                             "-1000..1000 ms)\n", i + 1 < argc ? argv[i + 1] : "", RP_SIM_NCAMS);
+                return -1;
+            }
+            cfg->cam_offset_s[k] = ms * 1e-3;
+            if (!*end) {
+                break;
+            }
+            p = end + 1;
+        }
+        return 2;
     }
     static const char *const with_value[] = {"--seed",  "--run",        "--frames", "--width",
                                              "--height", "--focal-px",  "--dist",   "--ss",
                                              "--noise-grey", "--blur",  "--brightness",
                                              "--face-px", "--disc-r", "--object-cam",
-                                             "--object-cover"};
+                                             "--object-cover", "--jitter-ms"};
     bool known = false;
     for (const char *w : with_value) {
         known = known || !std::strcmp(o, w);
@@ -133,6 +165,9 @@ inline int cli_parse(int argc, char **argv, int i, SeqCfg *cfg)
         } else if (!std::strcmp(o, "--object-cover")) {
             bad = bad || !(x > 0 && x <= 0.6);
             cfg->object_cover = x;
+        } else if (!std::strcmp(o, "--jitter-ms")) {
+            bad = bad || !(x >= 0 && x <= 100);
+            cfg->jitter_s = x * 1e-3;
         } else if (!std::strcmp(o, "--disc-r")) {
             bad = bad || !(x > 0 && x <= 0.05);
             cfg->disc_radius = x;

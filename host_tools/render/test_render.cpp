@@ -12,6 +12,9 @@
  *  - the moving object: drawn exactly where its sphere meets the pixels' rays (shell and points
  *    scenes), covering 30 +- 3 % of the chosen camera, nothing in a camera that does not see it,
  *    nothing when off, the same bytes for the same seed.
+ *  - camera clocks: with an offset on one camera, that camera's image is the synchronised
+ *    sequence's camera rendered at the pose of set time + offset (rp_sim_pose), the others'
+ *    images and every stamp and truth are unchanged.
  * Prints the measured figures; ends with "[  PASSED  ] N test(s)." and exit 0 when all pass.
  */
 #include <algorithm>
@@ -427,6 +430,59 @@ static void test_moving_object()
           "moving object in cam2, shell and points scenes: 30 +- 3 %, drawn where it is");
 }
 
+static bool same_pose(const rpr::Pose &a, const double d[3], const double R[9])
+{
+    bool same = true;
+    for (int i = 0; i < 3; ++i) {
+        same = same && a.d[i] == d[i];
+    }
+    for (int i = 0; i < 9; ++i) {
+        same = same && a.R[i] == R[i];
+    }
+    return same;
+}
+
+static void test_camera_clocks()
+{
+    rpr::SeqCfg c = small_cfg(5);
+    c.motion = RP_SIM_MOTION_SMOOTH;
+    c.frames = 4;
+    rpr::SeqCfg co = c;
+    co.cam_offset_s[1] = 0.040; /* cam2 (rig camera 1) 40 ms late */
+    rpr::Sequence sync(c), off(co);
+    check(sync.ok() && off.ok(), "smooth sequences with and without an offset set up");
+    rp_sim_cfg_t sc;
+    rp_sim_default_cfg(&sc);
+    sc.motion = RP_SIM_MOTION_SMOOTH;
+    sc.n_frames = c.frames;
+    rp_sim_run_t sr;
+    check(rp_sim_run_init(&sr, &sc, c.seed, c.run) == 0, "the run set up");
+    const uint32_t j = 3;
+    double d[3], R[9];
+    rp_sim_pose(&sr, rp_sim_set_time(&sr, j) + 0.040, d, R);
+    const bool at_own_time = same_pose(off.cam_pose(j, 1), d, R);
+    rp_sim_pose(&sr, rp_sim_set_time(&sr, j), d, R);
+    const bool others_at_set_time = same_pose(off.cam_pose(j, 0), d, R) &&
+                                    same_pose(off.pose(j), d, R) &&
+                                    same_pose(sync.cam_pose(j, 1), d, R);
+    rp_sim_run_free(&sr);
+    check(at_own_time && others_at_set_time && off.utime(j) == sync.utime(j),
+          "offset camera posed at set time + 40 ms, the others and the stamps at the set's");
+    cv::Mat a0, b0, a1, b1;
+    sync.render(j, 0, &a0);
+    off.render(j, 0, &b0);
+    sync.render(j, 1, &a1);
+    off.render(j, 1, &b1);
+    const double moved = cv::norm(a1, b1, cv::NORM_L1) / (double)a1.total();
+    std::printf("  camera clocks: cam2 40 ms late changes its image by %.2f grey levels per "
+                "pixel on average\n", moved);
+    check(cv::norm(a0, b0, cv::NORM_INF) == 0.0 && moved > 1.0,
+          "only the offset camera's image changes");
+    rpr::SeqCfg cp = co;
+    cp.motion = RP_SIM_MOTION_PAPER;
+    check(!rpr::Sequence(cp).ok(), "offsets with the paper's motion are refused");
+}
+
 int main()
 {
     test_determinism();
@@ -437,6 +493,7 @@ int main()
     test_depths();
     test_points_scene();
     test_moving_object();
+    test_camera_clocks();
     if (n_fail == 0) {
         std::printf("[  PASSED  ] %d test(s).\n", n_pass);
         return 0;

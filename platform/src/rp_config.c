@@ -725,9 +725,9 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     cfg->sim.drop_from = (uint32_t)drop_from;
     static const char *const motions[] = {"paper", "turn", "pitch", "smooth"}; /* rp_sim.h */
     cfg->sim.motion = -1;
-    for (int8_t m = 0; m < (int8_t)(sizeof motions / sizeof motions[0]); ++m) {
-        if (strcmp(motion, motions[m]) == 0) {
-            cfg->sim.motion = m;
+    for (int8_t mi = 0; mi < (int8_t)(sizeof motions / sizeof motions[0]); ++mi) {
+        if (strcmp(motion, motions[mi]) == 0) {
+            cfg->sim.motion = mi;
         }
     }
     if (cfg->sim.motion < 0) {

@@ -203,11 +203,15 @@ bool run_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rp_rig_t &rig, uin
 }
 
 bool sim_reference(SimRef *s, const rp_pipe_cfg_t &cfg, const rp_rig_t &rig, uint64_t seed,
-                   uint32_t run, uint32_t frames, int motion, Method *m)
+                   uint32_t run, uint32_t frames, const rpr::SeqCfg &rc, Method *m)
 {
     rp_sim_cfg_t sc;
     rp_sim_default_cfg(&sc);
-    sc.motion = (rp_sim_motion_t)motion; /* the rendered run's motion (rp_render_cli.hpp) */
+    sc.motion = (rp_sim_motion_t)rc.motion; /* the rendered run's motion and clocks */
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        sc.cam_offset_s[k] = rc.cam_offset_s[k];
+    }
+    sc.jitter_s = rc.jitter_s;
     sc.width = rig.cam[0].cam.width;
     sc.height = rig.cam[0].cam.height;
     sc.focal_px = (double)rig.cam[0].cam.fx;
@@ -515,7 +519,7 @@ int main(int argc, char **argv)
             double sim_tx = -1.0;
             if (sim_ref) {
                 const double before = methods[m].err_sim[0];
-                if (!sim_reference(ref, cfgs[m], seq.rig(), rc.seed, r, rc.frames, rc.motion,
+                if (!sim_reference(ref, cfgs[m], seq.rig(), rc.seed, r, rc.frames, rc,
                                    &methods[m])) {
                     std::fprintf(stderr, "rigpose-e2e: feature-level reference failed\n");
                     return 1;

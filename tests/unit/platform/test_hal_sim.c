@@ -6,7 +6,8 @@
  *     each failure told by rp_hal_errmsg;
  *   - through the table with cfg.sim_opts it delivers exactly the sets of its typed API with the
  *     same options (noise, a camera vanishing from set K: GONE | MISSING, no features);
- *   - bad options and rigs are refused naming what is wrong.
+ *   - bad options and rigs are refused naming what is wrong;
+ *   - the smooth motion (source.sim.motion: smooth) is delivered with its truth.
  */
 #include <string.h>
 
@@ -145,6 +146,10 @@ static void test_bad_options_are_named(void **state)
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_ARG);
     assert_non_null(strstr(rp_hal_errmsg(NULL), "sim: noise_px -1 out of 0..100 px"));
     o = rp_hal_sim_default_opts();
+    o.motion = 4;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_ARG);
+    assert_non_null(strstr(rp_hal_errmsg(NULL), "or 3 (smooth)"));
+    o = rp_hal_sim_default_opts();
     cfg.n_cams = 4;
     assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_ARG);
     assert_non_null(strstr(rp_hal_errmsg(NULL), "sim: the simulated rig has 6 cameras, not 4"));
@@ -169,12 +174,47 @@ static void test_bad_options_are_named(void **state)
     rp_hal_close(src);
 }
 
+/* The smooth motion (rp_sim.h, RP_SIM_MOTION_SMOOTH) through the table: its truth, every
+ * camera present at the set's time (the sim source has no camera clocks). */
+static void test_smooth_motion_is_delivered(void **state)
+{
+    (void)state;
+    rp_hal_source_t *src = NULL;
+    rp_hal_cfg_t cfg = sim_cfg();
+    rp_hal_sim_opts_t o = rp_hal_sim_default_opts();
+    o.motion = (int8_t)RP_SIM_MOTION_SMOOTH;
+    cfg.sim_opts = &o;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    rp_sim_cfg_t sc;
+    rp_sim_default_cfg(&sc);
+    sc.motion = RP_SIM_MOTION_SMOOTH;
+    sc.n_frames = FRAMES;
+    rp_sim_run_t sr;
+    assert_int_equal(rp_sim_run_init(&sr, &sc, 1, 0), 0);
+    for (uint32_t j = 0; j < FRAMES; ++j) {
+        assert_int_equal(rp_hal_grab(src, &g_set), RP_HAL_OK);
+        for (int i = 0; i < 6; ++i) {
+            assert_true(g_set.truth[i] == (rp_real)sr.truth[6u * j + (unsigned)i]);
+        }
+        for (int k = 0; k < 6; ++k) {
+            assert_int_equal(g_set.cam[k].flags, 0);
+            assert_int_equal(g_set.cam[k].utime, g_set.utime);
+            assert_true(g_set.feats->n[k] > 0);
+        }
+    }
+    assert_true(sr.truth[6u * (FRAMES - 1)] != 0.0); /* it moved */
+    rp_sim_run_free(&sr);
+    rp_hal_close(src);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sim_goes_through_the_table),
         cmocka_unit_test(test_the_table_and_the_typed_api_deliver_the_same_sets),
         cmocka_unit_test(test_bad_options_are_named),
+        cmocka_unit_test(test_smooth_motion_is_delivered),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
