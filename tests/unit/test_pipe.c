@@ -626,6 +626,16 @@ static void test_camera_times(void **state)
     assert_status(rp_pipe_cam_time(&pipe, 0, u3), RP_E_ARG); /* estimated */
 
     /* the int64 ends do not overflow the difference */
+    int32_t dt = 7;
+    assert_status(rp_pipe_cam_dt(INT64_MIN, INT64_MAX, &dt), RP_E_RANGE);
+    assert_status(rp_pipe_cam_dt(INT64_MAX, INT64_MIN, &dt), RP_E_RANGE);
+    assert_status(rp_pipe_cam_dt(0, INT32_MIN, &dt), RP_E_RANGE); /* 2^31 */
+    assert_int_equal(dt, 7);
+    assert_ok(rp_pipe_cam_dt(INT64_MIN, INT64_MIN + INT32_MAX, &dt));
+    assert_int_equal(dt, -INT32_MAX);
+    assert_ok(rp_pipe_cam_dt(-5, 7, &dt));
+    assert_int_equal(dt, -12);
+    assert_status(rp_pipe_cam_dt(0, 0, NULL), RP_E_ARG);
     assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
     assert_ok(rp_pipe_begin(&pipe, INT64_MAX - 10, NULL));
     assert_status(rp_pipe_cam_time(&pipe, 0, INT64_MIN), RP_E_RANGE);

@@ -230,6 +230,12 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
  *   RP_E_RANGE  a camera's time differs from utime by more than an int32_t of microseconds
  *               (35 min: a broken stamp), checked before anything else is done: est = last
  *               estimate with RP_EST_LOST, as for a utime not after the previous one. */
+/* A camera's capture time relative to its set's: *dt_us = cam_utime - utime (us), computed
+ * without overflow. RP_OK, RP_E_RANGE (does not fit an int32_t: *dt_us untouched) or RP_E_ARG
+ * (dt_us NULL). What rp_pipe_cam_time and rp_pipe_step_timed check; for callers that build
+ * frame sets themselves (rp_frameset_t.cam_dt_us). */
+rp_status_t rp_pipe_cam_dt(int64_t cam_utime, int64_t utime, int32_t *dt_us);
+
 rp_status_t rp_pipe_step_timed(rp_pipe_t *pipe, const rp_image_t *const images[],
                                const int64_t cam_utime[], uint8_t n, int64_t utime,
                                rp_estimate_t *est);

@@ -455,19 +455,22 @@ rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est)
     return RP_OK;
 }
 
-/* cam_utime - set_utime (us) into *dt if it fits an int32_t (no overflow on the way), else 0. */
-static int cam_dt_fits(int64_t cam_utime, int64_t set_utime, int32_t *dt)
+rp_status_t rp_pipe_cam_dt(int64_t cam_utime, int64_t utime, int32_t *dt_us)
 {
-    if ((set_utime < 0 && cam_utime > INT64_MAX + set_utime) ||
-        (set_utime > 0 && cam_utime < INT64_MIN + set_utime)) {
-        return 0;
+    if (dt_us == NULL) {
+        return RP_E_ARG;
     }
-    const int64_t d = cam_utime - set_utime;
+    /* cam_utime - utime overflows int64_t exactly when these hold */
+    if ((utime < 0 && cam_utime > INT64_MAX + utime) ||
+        (utime > 0 && cam_utime < INT64_MIN + utime)) {
+        return RP_E_RANGE;
+    }
+    const int64_t d = cam_utime - utime;
     if (d < INT32_MIN || d > INT32_MAX) {
-        return 0;
+        return RP_E_RANGE;
     }
-    *dt = (int32_t)d;
-    return 1;
+    *dt_us = (int32_t)d;
+    return RP_OK;
 }
 
 rp_status_t rp_pipe_cam_time(rp_pipe_t *pipe, uint8_t cam, int64_t utime_us)
@@ -476,12 +479,7 @@ rp_status_t rp_pipe_cam_time(rp_pipe_t *pipe, uint8_t cam, int64_t utime_us)
         cam >= pipe->rig->n_cams) {
         return RP_E_ARG;
     }
-    int32_t dt = 0;
-    if (!cam_dt_fits(utime_us, pipe->fs.utime, &dt)) {
-        return RP_E_RANGE;
-    }
-    pipe->fs.cam_dt_us[cam] = dt;
-    return RP_OK;
+    return rp_pipe_cam_dt(utime_us, pipe->fs.utime, &pipe->fs.cam_dt_us[cam]);
 }
 
 rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const images[],
@@ -591,7 +589,7 @@ rp_status_t rp_pipe_step_timed(rp_pipe_t *pipe, const rp_image_t *const images[]
     }
     for (uint8_t k = 0; cam_utime != NULL && k < n; ++k) {
         int32_t dt;
-        if (timed_image(pipe, images, k) && !cam_dt_fits(cam_utime[k], utime, &dt)) {
+        if (timed_image(pipe, images, k) && rp_pipe_cam_dt(cam_utime[k], utime, &dt) != RP_OK) {
             *est = pipe->last; /* nothing done, as for a utime out of order */
             est->flags |= RP_EST_LOST;
             return RP_E_RANGE;
