@@ -326,11 +326,16 @@ static rp_status_t estimator_step(const rp_hal_set_t *set, rp_estimate_t *est,
         *fs_out = set->feats;
         return rp_est_step(&g_est, set->feats, est);
     }
+    /* Each camera at its own capture time (v4l2's kernel stamp, replay's recorded time); the
+     * set's time stays the HAL's. A camera without an image is flagged RP_FS_NO_IMAGE by the
+     * pipeline. */
     const rp_image_t *img[RP_MAX_CAMS];
+    int64_t cam_utime[RP_MAX_CAMS];
     for (uint8_t k = 0; k < RP_MAX_CAMS; ++k) {
         img[k] = (k < set->n_cams && set->cam[k].img.data != NULL) ? &set->cam[k].img : NULL;
+        cam_utime[k] = img[k] != NULL ? set->cam[k].utime : set->utime;
     }
-    return rp_est_step_images(&g_est, img, set->n_cams, set->utime, est, fs_out);
+    return rp_est_step_images(&g_est, img, cam_utime, set->n_cams, set->utime, est, fs_out);
 }
 
 /* ---- printing -------------------------------------------------------------------------------- */

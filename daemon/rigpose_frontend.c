@@ -9,8 +9,9 @@
  * It reads the cameras of LIST (rig indices or names, comma-separated) through the HAL
  * (v4l2 or replay: FILE's source, with only those cameras opened), runs on them the very
  * trackers and stereo matcher of the in-process daemon, and publishes one rigpose.features_t
- * per camera image on that camera's channel (lcm.features_channel + index, rp_feats.h): its
- * capture time, the camera's frame counter, every tracked feature with its id, position and
+ * per camera image on that camera's channel (lcm.features_channel + index, rp_feats.h): the
+ * camera's own capture time (the HAL's per-camera stamp; a camera without an image in the set:
+ * the set's time), the camera's frame counter, every tracked feature with its id, position and
  * FEAT_NEW / FEAT_MATCHED flags. A stereo layout's front end must own both cameras of each
  * pair it touches (the matcher needs both images). Since the trackers are the pipeline's, the
  * daemon's frame sets are those of the in-process run, and so are its poses
@@ -210,14 +211,28 @@ static int owns(uint8_t cam)
 }
 
 /* This front end's images of one set through the pipeline's front end: the trackers of its
- * cameras, then the matching of its pairs (a pair of other cameras has no image and is not
- * matched); *fs their features. RP_OK, or RP_E_RANGE when utime is not after the last set's
- * (nothing tracked). */
-static rp_status_t track(const rp_image_t *const img[RP_MAX_CAMS], int64_t utime,
+ * cameras, each at its own capture time cam_utime[cam], then the matching of its pairs (a
+ * pair of other cameras has no image and is not matched); *fs their features. RP_OK, or
+ * RP_E_RANGE when utime is not after the last set's or a camera's time is more than an
+ * int32_t of microseconds from it (nothing tracked). */
+static rp_status_t track(const rp_image_t *const img[RP_MAX_CAMS],
+                         const int64_t cam_utime[RP_MAX_CAMS], int64_t utime,
                          const rp_frameset_t **fs)
 {
+    for (uint8_t cam = 0; cam < g_cfg.rig.n_cams; ++cam) {
+        int32_t dt;
+        if (img[cam] != NULL && rp_pipe_cam_dt(cam_utime[cam], utime, &dt) != RP_OK) {
+            return RP_E_RANGE;
+        }
+    }
     if (rp_pipe_begin(&g_pipe, utime, NULL) != RP_OK) {
         return RP_E_RANGE;
+    }
+    for (uint8_t cam = 0; cam < g_cfg.rig.n_cams; ++cam) {
+        if (img[cam] != NULL) {
+            /* ignored: the step is begun, cam a rig camera, its time checked above */
+            (void)rp_pipe_cam_time(&g_pipe, cam, cam_utime[cam]);
+        }
     }
     for (uint8_t t = 0; t < rp_pipe_n_trackers(&g_pipe); ++t) {
         uint8_t cam = 0;
@@ -303,18 +318,22 @@ static int run(const fe_opts_t *o, rp_hal_source_t *src, lcm_t *lcm, uint32_t *n
         }
         grab_errors = 0;
         const rp_image_t *img[RP_MAX_CAMS] = {NULL};
+        int64_t cam_utime[RP_MAX_CAMS] = {0};
         for (uint8_t i = 0; i < g_n_own && i < g_set.n_cams; ++i) {
             img[g_cam[i]] = g_set.cam[i].img.data != NULL ? &g_set.cam[i].img : NULL;
+            cam_utime[g_cam[i]] = img[g_cam[i]] != NULL ? g_set.cam[i].utime : g_set.utime;
         }
         const rp_frameset_t *fs = NULL;
-        if (track(img, g_set.utime, &fs) != RP_OK) { /* nothing tracked: nothing to say */
-            fprintf(stderr, "rigpose-frontend: set at %lld us: not after the last one: not "
-                    "tracked\n", (long long)g_set.utime);
+        if (track(img, cam_utime, g_set.utime, &fs) != RP_OK) { /* nothing tracked */
+            fprintf(stderr, "rigpose-frontend: set at %lld us: not after the last one, or a "
+                    "camera's time 35 min from it: not tracked\n", (long long)g_set.utime);
             continue;
         }
-        const int64_t stamp = g_set.utime + (o->realtime ? realtime_offset_us() : 0);
+        const int64_t clock_off = o->realtime ? realtime_offset_us() : 0;
         for (uint8_t i = 0; i < g_n_own; ++i) {
             const uint8_t cam = g_cam[i];
+            /* each camera's own capture time (a camera without an image: the set's) */
+            const int64_t stamp = cam_utime[cam] + clock_off;
             rp_pub_fill_features(&g_msg, cam, stamp, g_seq[i]++, fs->f[cam], fs->n[cam]);
             g_msg.state = (int8_t)(g_set.cam[i].flags &
                                    (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE | RP_HAL_CAM_DROPPED));

@@ -115,8 +115,30 @@ static void match_job(void *arg, unsigned k)
     (void)rp_pipe_match_pair(&est->pipe, (uint8_t)k);
 }
 
-rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], uint8_t n,
-                               int64_t utime, rp_estimate_t *out, const rp_frameset_t **fs_out)
+/* What rp_pipe_step_timed checks before it begins (the phased path does the same): every
+ * camera with an image has a time within an int32_t of microseconds of utime. RP_OK, or
+ * RP_E_RANGE with out the last estimate, LOST (rp_pipe_step_timed's answer). */
+static rp_status_t cam_times_fit(rp_est_t *est, const rp_image_t *const images[],
+                                 const int64_t cam_utime[], uint8_t n, int64_t utime,
+                                 rp_estimate_t *out)
+{
+    for (uint8_t k = 0; cam_utime != NULL && k < n; ++k) {
+        if (k >= est->pipe.rig->n_cams || images[k] == NULL || images[k]->data == NULL) {
+            continue; /* not read */
+        }
+        int32_t dt;
+        if (rp_pipe_cam_dt(cam_utime[k], utime, &dt) != RP_OK) {
+            *out = est->pipe.last;
+            out->flags |= RP_EST_LOST;
+            return RP_E_RANGE;
+        }
+    }
+    return RP_OK;
+}
+
+rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[],
+                               const int64_t cam_utime[], uint8_t n, int64_t utime,
+                               rp_estimate_t *out, const rp_frameset_t **fs_out)
 {
     if (fs_out != NULL) {
         *fs_out = NULL;
@@ -130,9 +152,19 @@ rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], 
     }
     rp_status_t st;
     if (rp_pool_threads(&est->pool) <= 1 || images == NULL || n > RP_MAX_CAMS || out == NULL) {
-        st = rp_pipe_step(&est->pipe, images, n, utime, out); /* its argument checks */
+        /* its argument checks */
+        st = rp_pipe_step_timed(&est->pipe, images, cam_utime, n, utime, out);
     } else {
-        st = rp_pipe_begin(&est->pipe, utime, out); /* fills out on failure */
+        st = cam_times_fit(est, images, cam_utime, n, utime, out);
+        if (st == RP_OK) {
+            st = rp_pipe_begin(&est->pipe, utime, out); /* fills out on failure */
+        }
+        for (uint8_t k = 0; st == RP_OK && cam_utime != NULL && k < n; ++k) {
+            if (k < est->pipe.rig->n_cams && images[k] != NULL && images[k]->data != NULL) {
+                /* ignored: the step is begun, k a rig camera, the time checked above: RP_OK */
+                (void)rp_pipe_cam_time(&est->pipe, k, cam_utime[k]);
+            }
+        }
         if (st == RP_OK) {
             est->images = images;
             est->n_images = n;

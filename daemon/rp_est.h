@@ -57,8 +57,12 @@ rp_status_t rp_est_step(rp_est_t *est, const rp_frameset_t *fs, rp_estimate_t *o
 
 /* One set of images (n cameras, NULL for a missing one) through trackers (one job per camera),
  * matcher and estimator; fs_out (optional) receives the features the estimator used, or NULL.
- * rp_pipe_step's status. */
-rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[], uint8_t n,
-                               int64_t utime, rp_estimate_t *out, const rp_frameset_t **fs_out);
+ * utime is the set's time; cam_utime[k] (NULL: every camera at utime) camera k's own capture
+ * time (the HAL's rp_hal_frame_t.utime: v4l2's kernel stamp, replay's recorded time), which the
+ * frame set carries as cam_dt_us (rp_pipe_step_timed; a missing camera's entry is not read and
+ * the frame set flags it RP_FS_NO_IMAGE). rp_pipe_step_timed's status. */
+rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[],
+                               const int64_t cam_utime[], uint8_t n, int64_t utime,
+                               rp_estimate_t *out, const rp_frameset_t **fs_out);
 
 #endif /* RP_EST_H */

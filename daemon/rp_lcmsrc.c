@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "rigpose/rp_pipe.h"
 #include "rigpose/rp_track.h"
 #include "rp_feats.h"
 
@@ -33,7 +34,17 @@ static uint32_t map_id(rp_lsrc_t *s, uint32_t id, const int8_t instance[32])
 
 /* ---- receiving ------------------------------------------------------------------------------- */
 
-static int64_t dist_us(int64_t a, int64_t b) { return a > b ? a - b : b - a; }
+/* |a - b| in us, exact for any two int64_t (no overflow: the network sends any time). */
+static uint64_t dist_us(int64_t a, int64_t b)
+{
+    return a > b ? (uint64_t)a - (uint64_t)b : (uint64_t)b - (uint64_t)a;
+}
+
+/* a > b + tol (tol >= 0), without overflow. */
+static int later_than(int64_t a, int64_t b, int64_t tol)
+{
+    return a > b && dist_us(a, b) > (uint64_t)tol;
+}
 
 static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *user)
 {
@@ -54,7 +65,7 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
     }
     const int64_t now = rp_hal_now_us();
     rp_lsrc_cam_t *c = &s->cam[k];
-    if (s->any_out && m->utime <= s->last_out_utime + s->tol_us) {
+    if (s->any_out && !later_than(m->utime, s->last_out_utime, s->tol_us)) {
         /* Late. Not counted as heard either: a restarted front end catching up on the frames
          * of the last timeout_ms would otherwise hold every set back until it is current. */
         s->n_late++;
@@ -73,7 +84,7 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
     rp_lsrc_pending_t *p = NULL, *free_slot = NULL;
     for (int i = 0; i < RP_LSRC_PENDING; ++i) {
         rp_lsrc_pending_t *q = &s->pend[i];
-        if (q->used && dist_us(q->utime, m->utime) <= s->tol_us) {
+        if (q->used && dist_us(q->utime, m->utime) <= (uint64_t)s->tol_us) {
             p = q;
             break;
         }
@@ -98,6 +109,7 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
         return;
     }
     p->have[k] = 1;
+    p->cam_utime[k] = m->utime;
     p->state[k] = (uint8_t)m->state;
     p->seq[k] = m->seq;
     p->drops[k] = m->drops;
@@ -155,7 +167,7 @@ static rp_lsrc_pending_t *ready(rp_lsrc_t *s, int64_t now)
     for (uint8_t k = 0; k < s->n_cams; ++k) {
         const rp_lsrc_cam_t *c = &s->cam[k];
         if (s->want[k] && !p->have[k] && !absent(s, k, now) &&
-            !(c->seen && c->last_utime > p->utime + s->tol_us)) {
+            !(c->seen && later_than(c->last_utime, p->utime, s->tol_us))) {
             return NULL;
         }
     }
@@ -189,7 +201,7 @@ static void fill_cams(rp_lsrc_t *s, const rp_lsrc_pending_t *p, rp_hal_set_t *se
         rp_hal_frame_t *fr = &set->cam[k];
         if (p != NULL && p->have[k]) {
             fr->flags = p->state[k] & (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE | RP_HAL_CAM_DROPPED);
-            fr->utime = p->utime;
+            fr->utime = p->cam_utime[k];
             fr->seq = (uint32_t)p->seq[k];
             fr->drops = (uint32_t)(p->drops[k] > 0 ? p->drops[k] : 0);
             continue;
@@ -208,6 +220,39 @@ static void fill_cams(rp_lsrc_t *s, const rp_lsrc_pending_t *p, rp_hal_set_t *se
     }
 }
 
+/* Camera k delivered an image into pending set p. */
+static int has_image(const rp_lsrc_pending_t *p, uint8_t k)
+{
+    return p->have[k] && !(p->state[k] & RP_HAL_CAM_MISSING);
+}
+
+/* The set's time of p (rp_lcmsrc.h, Times), and each camera's time and flags into its frame set. */
+static int64_t set_times(rp_lsrc_t *s, rp_lsrc_pending_t *p)
+{
+    int64_t t = p->utime;
+    for (uint8_t k = 0; k < s->n_cams; ++k) {
+        if (has_image(p, k)) {
+            t = p->cam_utime[k];
+            break;
+        }
+    }
+    if (s->any_out && t <= s->last_set_utime) {
+        t = p->utime; /* after the last set's time: its grouping time is past sync_tol_us */
+    }
+    p->fs.utime = t;
+    for (uint8_t k = 0; k < s->n_cams; ++k) {
+        p->fs.cam_dt_us[k] = 0;
+        if (p->have[k]) {
+            /* ignored: cannot fail: within 2 sync_tol_us of t, at most 2 s (rp_lsrc_open) */
+            (void)rp_pipe_cam_dt(p->cam_utime[k], t, &p->fs.cam_dt_us[k]);
+        }
+        if (s->want[k] && !has_image(p, k)) {
+            p->fs.cam_flags[k] |= RP_FS_NO_IMAGE;
+        }
+    }
+    return t;
+}
+
 rp_hal_status_t rp_lsrc_grab(rp_lsrc_t *s, rp_hal_set_t *set)
 {
     if (s == NULL || set == NULL || s->lcm == NULL) {
@@ -222,13 +267,15 @@ rp_hal_status_t rp_lsrc_grab(rp_lsrc_t *s, rp_hal_set_t *set)
         const int64_t now = rp_hal_now_us();
         rp_lsrc_pending_t *p = ready(s, now);
         if (p != NULL) {
+            const int64_t t = set_times(s, p);
             s->out = p->fs;
             set->feats = &s->out;
-            set->utime = p->utime;
+            set->utime = t;
             set->seq = s->set_seq++;
             fill_cams(s, p, set, now);
             s->any_out = 1;
             s->last_out_utime = p->utime;
+            s->last_set_utime = t;
             p->used = 0;
             return RP_HAL_OK;
         }
@@ -268,6 +315,12 @@ rp_hal_status_t rp_lsrc_open(rp_lsrc_t *s, lcm_t *lcm, const rp_config_t *cfg)
     if (rp_feats_layout_cams(&cfg->pipe, s->n_cams, s->want) == 0) {
         /* ignored: fits */
         (void)snprintf(s->err, sizeof s->err, "lcm: the layout uses no camera");
+        return RP_HAL_E_ARG;
+    }
+    if (cfg->hal.sync_tol_us < 0 || cfg->hal.sync_tol_us > RP_LSRC_TOL_MAX_US) {
+        /* ignored: fits */
+        (void)snprintf(s->err, sizeof s->err, "lcm: sync_tol_us %lld outside 0..%d",
+                       (long long)cfg->hal.sync_tol_us, RP_LSRC_TOL_MAX_US);
         return RP_HAL_E_ARG;
     }
     s->lcm = lcm;

@@ -18,6 +18,17 @@
  * catching up does not hold the sets back). Sets go out in time order; a message for a time at or before a set already out
  * is late and dropped (counted).
  *
+ * Times. Each message's utime is its camera's own capture time (rigpose-frontend stamps each
+ * camera's image with the HAL's per-camera stamp). The set's time (set->utime, feats->utime)
+ * is, as the v4l2 HAL's, the capture time of the lowest-index camera of the set that delivered
+ * an image (a message without features_t.state's MISSING bit); if none did, or if that time is
+ * not after the previous set's (cameras spread over more than sync_tol_us), the set's first
+ * message's time, which always is. So the set's time does not depend on the order the
+ * messages arrived in. feats->cam_dt_us[k] is camera k's time minus the set's (within
+ * 2 sync_tol_us: sync_tol_us is at most 1 s) and set->cam[k].utime camera k's time; a camera
+ * of the layout without a message in the set, or whose message says MISSING, is flagged
+ * RP_FS_NO_IMAGE (as the in-process pipeline flags a camera without an image).
+ *
  * Track ids. A front end restarted (a new instance in its messages) starts its trackers' serials
  * again from 0, which would give new tracks the ids of landmarks the estimator still holds: the
  * source adds, per id camera (rp_track_id_cam), an offset that continues after the highest
@@ -43,7 +54,8 @@
 
 typedef struct {
     uint8_t used;
-    int64_t utime;                     /* us, the first message's */
+    int64_t utime;                     /* us, the first message's (the set's grouping time) */
+    int64_t cam_utime[RP_MAX_CAMS];    /* us, each camera's message's (its capture time) */
     int64_t first_rx_us;               /* HAL clock when its first message came */
     uint8_t have[RP_MAX_CAMS];
     uint8_t state[RP_MAX_CAMS];        /* features_t.state */
@@ -71,7 +83,8 @@ struct rp_lsrc {
     uint8_t want[RP_MAX_CAMS];         /* cameras of the layout */
     int64_t tol_us, timeout_us;
     uint8_t any_out;
-    int64_t last_out_utime;
+    int64_t last_out_utime;            /* grouping time of the last set out (late messages) */
+    int64_t last_set_utime;            /* its set time (rp_lcmsrc.h, Times) */
     uint32_t set_seq;
     rp_lsrc_cam_t cam[RP_MAX_CAMS];
     rp_lsrc_pending_t pend[RP_LSRC_PENDING];
@@ -89,8 +102,13 @@ struct rp_lsrc {
     uint32_t n_msgs, n_late, n_bad, n_full, n_restarts;
 };
 
+/* Largest sync_tol_us the source takes (the configuration's limit): camera times of a set then
+ * differ by at most 2 s, so cam_dt_us fits its int32_t. */
+#define RP_LSRC_TOL_MAX_US 1000000
+
 /* Subscribe on lcm to the features channel of each camera of cfg's layout (cfg must outlive s).
- * RP_HAL_OK; RP_HAL_E_ARG (NULL, a layout without cameras, a channel name too long) or
+ * RP_HAL_OK; RP_HAL_E_ARG (NULL, a layout without cameras, a channel name too long, sync_tol_us
+ * outside 0..RP_LSRC_TOL_MAX_US) or
  * RP_HAL_E_OPEN (lcm_subscribe failed), the reason in rp_lsrc_errmsg. */
 rp_hal_status_t rp_lsrc_open(rp_lsrc_t *s, lcm_t *lcm, const rp_config_t *cfg);
 

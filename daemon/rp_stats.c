@@ -138,6 +138,8 @@ void rp_stats_fill_status(rp_stats_t *s, rigpose_status_t *m, const rp_hal_set_t
         m->drops[k] = (int32_t)set->cam[k].drops;
         m->features[k] = (int16_t)(fs != NULL ? fs->n[k] : 0);
         m->features_used[k] = (int16_t)est->n_used[k];
+        m->cam_dt_us[k] = (fs != NULL && !(fs->cam_flags[k] & RP_FS_NO_IMAGE)) ? fs->cam_dt_us[k]
+                                                                              : 0;
         s->period_frames[k] = 0;
     }
     m->latency_ms = lat_ms;

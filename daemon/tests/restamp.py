@@ -5,7 +5,8 @@ cameras; the stereo partners cam1b, cam3b left out of the rig, so that no proces
 nobody uses) or stereo4 (the render's own: both pairs, six cameras):
 
   OUT/NAME_frames.csv   SRC's frames, restamped to start LEAD_S seconds from now on this host's
-                        CLOCK_MONOTONIC (Python's time.monotonic), same spacing, absolute paths;
+                        CLOCK_MONOTONIC (Python's time.monotonic), same spacing (per-camera
+                        utime_us_<column> times moved alike), absolute paths;
   OUT/NAME_replay.yaml  SRC's rig.yaml on it with source.realtime: live (front ends, and the
                         in-process daemon), timeout_ms 1000;
   OUT/NAME_lcm.yaml     the same with source.kind: lcm (the daemon on the front ends' features);
@@ -23,10 +24,14 @@ rows = [l.rstrip("\n").split(",") for l in open(os.path.join(src, "frames.csv"))
 t0 = int(time.monotonic() * 1e6 + lead * 1e6)
 u0 = int(rows[1][0])
 csv = os.path.join(out, name + "_frames.csv")
+# time columns (utime_us, and each camera's utime_us_<column> when the cameras are stamped
+# apart) move by the same offset; the others are image paths
+is_time = [h == "utime_us" or h.startswith("utime_us_") for h in rows[0]]
 with open(csv, "w") as f:
     f.write(",".join(rows[0]) + "\n")
     for r in rows[1:]:
-        f.write(",".join([str(t0 + int(r[0]) - u0)] + [os.path.join(src, p) for p in r[1:]]) + "\n")
+        f.write(",".join(str(t0 + int(v) - u0) if t else os.path.join(src, v)
+                         for v, t in zip(r, is_time)) + "\n")
 y = open(os.path.join(src, "rig.yaml")).read()
 y = y.replace("realtime: false", "realtime: live\n  timeout_ms: 1000")
 y = y.replace("replay_index: frames.csv", "replay_index: " + csv)

@@ -10,7 +10,12 @@
  *     not wait; when it sends again it is back in the next set;
  *   - a restarted front end (a new instance) restarting its serials at 0: its ids continue
  *     after the highest serial seen from that camera; the first front end's ids are unchanged;
- *   - a timeout with nothing heard says so (RP_HAL_E_TIMEOUT, every camera MISSING).
+ *   - a timeout with nothing heard says so (RP_HAL_E_TIMEOUT, every camera MISSING);
+ *   - times: each camera's own capture time goes into its cam_dt_us (relative to the set's
+ *     time: the lowest-index camera with an image, whatever order the messages came in) and
+ *     set->cam[k].utime; a camera of the layout without a message, or whose message says
+ *     MISSING, is RP_FS_NO_IMAGE; messages at the ends of int64 do not overflow; a tolerance
+ *     over 1 s is refused.
  */
 #include <lcm/lcm.h>
 #include <math.h>
@@ -99,6 +104,14 @@ static void test_a_set_of_every_camera_goes_out_at_once(void **state)
     assert_true(g_set.feats->f[0][4].uv[0] == (rp_real)14 + (rp_real)5 / (rp_real)65536);
     assert_true(g_set.feats->f[1][2].uv[1] == (rp_real)22);
     assert_string_equal(rp_lsrc_errmsg(&g_src), "");
+    /* each camera at its own time */
+    assert_true(g_set.feats->utime == 1000);
+    assert_int_equal(g_set.feats->cam_dt_us[0], 0);
+    assert_int_equal(g_set.feats->cam_dt_us[1], 200);
+    assert_true(g_set.cam[0].utime == 1000 && g_set.cam[1].utime == 1200);
+    for (int k = 0; k < 3; ++k) {
+        assert_int_equal(g_set.feats->cam_flags[k], 0); /* camera 2: not the layout's */
+    }
 }
 
 static void test_moved_past_late_and_bad_messages(void **state)
@@ -116,6 +129,8 @@ static void test_moved_past_late_and_bad_messages(void **state)
     assert_true(g_set.utime == 2000);
     assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_MISSING); /* not GONE: it is sending */
     assert_int_equal(g_set.feats->n[1], 0);
+    assert_int_equal(g_set.feats->cam_flags[1], RP_FS_NO_IMAGE);
+    assert_int_equal(g_set.feats->cam_flags[0], 0);
     assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "camera 1: no features in this set"));
     assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
     assert_true(g_set.utime == 3000);
@@ -153,6 +168,7 @@ static void test_a_silent_camera_is_gone_then_rejoins(void **state)
     assert_true(waited >= TIMEOUT_MS / 2 && waited < 3 * TIMEOUT_MS);
     assert_true(g_set.utime == 2000);
     assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE);
+    assert_int_equal(g_set.feats->cam_flags[1], RP_FS_NO_IMAGE);
     /* gone: the next sets do not wait */
     send(0, 3000, 2, 4, 0, "A");
     t0 = rp_hal_now_us();
@@ -188,6 +204,56 @@ static void test_a_timeout_with_nothing_heard(void **state)
     assert_int_equal(rp_lsrc_grab(NULL, &g_set), RP_HAL_E_ARG);
 }
 
+/* The set's time is the lowest-index camera's with an image, whatever order the messages came
+ * in (camera 1's first here); a camera whose front end had no image (state MISSING) is
+ * RP_FS_NO_IMAGE and the next camera's time is the set's; each camera's difference in
+ * cam_dt_us, negative too. */
+static void test_each_camera_at_its_own_time(void **state)
+{
+    (void)state;
+    send(1, 5100, 0, 2, 0, "B");
+    send(0, 5000, 0, 2, 0, "A");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 5000 && g_set.feats->utime == 5000);
+    assert_int_equal(g_set.feats->cam_dt_us[0], 0);
+    assert_int_equal(g_set.feats->cam_dt_us[1], 100);
+    assert_true(g_set.cam[1].utime == 5100);
+
+    /* camera 0's front end had no image (its source's MISSING), stamped at its set's time */
+    rp_pub_fill_features(&g_m, 0, 6000, 1, NULL, 0);
+    g_m.state = RIGPOSE_STATUS_T_CAM_MISSING;
+    assert_int_equal(rp_pub_features(g_lcm, "FE0", &g_m), RP_PUB_OK);
+    send(1, 6250, 1, 2, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 6250);
+    assert_int_equal(g_set.feats->cam_flags[0], RP_FS_NO_IMAGE);
+    assert_int_equal(g_set.feats->cam_flags[1], 0);
+    assert_int_equal(g_set.feats->cam_dt_us[0], -250);
+    assert_int_equal(g_set.feats->cam_dt_us[1], 0);
+    assert_int_equal(g_set.cam[0].flags, RP_HAL_CAM_MISSING);
+
+    /* times at the ends of int64: late (before the last set), or a set of its own, no
+     * overflow (UBSan) */
+    send(0, INT64_MIN, 2, 1, 0, "A");
+    send(0, INT64_MAX, 3, 1, 0, "A");
+    send(1, INT64_MAX - 10, 2, 1, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == INT64_MAX);
+    assert_int_equal(g_set.feats->cam_dt_us[1], -10);
+    assert_int_equal(g_src.n_late, 1);
+}
+
+static void test_a_tolerance_over_a_second_is_refused(void **state)
+{
+    (void)state;
+    rp_lsrc_close(&g_src);
+    g_cfg.hal.sync_tol_us = RP_LSRC_TOL_MAX_US + 1;
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_E_ARG);
+    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "sync_tol_us 1000001 outside 0..1000000"));
+    g_cfg.hal.sync_tol_us = RP_LSRC_TOL_MAX_US;
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+}
+
 static void test_layout_cameras_and_partners(void **state)
 {
     (void)state;
@@ -218,6 +284,9 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_a_silent_camera_is_gone_then_rejoins, setup,
                                         teardown),
         cmocka_unit_test_setup_teardown(test_a_timeout_with_nothing_heard, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_each_camera_at_its_own_time, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_a_tolerance_over_a_second_is_refused, setup,
+                                        teardown),
         cmocka_unit_test(test_layout_cameras_and_partners),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -73,6 +73,9 @@ static void test_status_reports_the_period_then_starts_a_new_one(void **state)
     memset(&fs, 0, sizeof fs);
     fs.n[0] = 120;
     fs.n[1] = 110;
+    fs.cam_dt_us[0] = -1500; /* camera 0 captured 1.5 ms before the set's time */
+    fs.cam_dt_us[1] = 2500;
+    fs.cam_flags[1] = RP_FS_NO_IMAGE; /* no image: no time reported */
     rigpose_status_t m;
     rp_stats_fill_status(&g_s, &m, &g_set, RP_HAL_OK, &fs, &est, 29.0f, 2.5f, 2000000);
     assert_int_equal(m.seq, 0);
@@ -87,6 +90,8 @@ static void test_status_reports_the_period_then_starts_a_new_one(void **state)
     assert_int_equal(m.drops[1], 10);
     assert_int_equal(m.features[0], 120);
     assert_int_equal(m.features_used[0], 50);
+    assert_int_equal(m.cam_dt_us[0], -1500);
+    assert_int_equal(m.cam_dt_us[1], 0);
     assert_near(m.latency_ms_max, 29.0, 1e-6);
     assert_near(m.process_ms, 2.5, 1e-6);
     assert_int_equal(m.n_lost, 1);

@@ -10,6 +10,8 @@
  *     in a job of the pool (rp_hal_cfg_t.run_jobs), then each camera's tracker in a job
  *     (rp_est_step_images): the estimates on 2, 3 and 4 threads are bit for bit those of one
  *     thread, for stereo4 and gc; and they follow the rendered motion (the run is a real one).
+ *     Each camera carries its own capture time (frames.csv's utime_us_<column>, CAM_DT_US
+ *     apart), passed as the daemon passes it: the frame sets carry them on every thread count.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
@@ -154,6 +156,9 @@ static void test_default_threads_one_per_core_at_most_one_per_tracker(void **sta
 #define H 240
 #define NFRAMES 10
 #define DT_US 33333
+/* Camera k's capture time minus the set's in the replay folder, us (small: the images are
+ * rendered at the set's time). */
+#define CAM_DT_US(k) (100 * (k) - 200)
 
 static char g_dir[64];
 static uint8_t g_img[W * H];
@@ -202,7 +207,11 @@ static int setup_replay(void **state)
     if (csv == NULL) {
         return -1;
     }
-    fprintf(csv, "utime_us,c0,c1,c2,c3,c4,c5\n");
+    fprintf(csv, "utime_us,c0,c1,c2,c3,c4,c5");
+    for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+        fprintf(csv, ",utime_us_c%d", k);
+    }
+    fprintf(csv, "\n");
     for (int j = 0; j < NFRAMES; ++j) {
         for (int i = 0; i < 6; ++i) {
             g_truth[j][i] = (rp_real)(step[i] * j);
@@ -213,6 +222,9 @@ static int setup_replay(void **state)
             snprintf(path, sizeof path, "%s/c%d_%d.pgm", g_dir, k, j);
             write_pgm(path, g_img);
             fprintf(csv, ",c%d_%d.pgm", k, j);
+        }
+        for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+            fprintf(csv, ",%d", j * DT_US + CAM_DT_US(k));
         }
         fprintf(csv, "\n");
     }
@@ -275,14 +287,23 @@ static void run_replay(rp_pipe_layout_t layout, unsigned threads, rp_estimate_t 
     for (int j = 0; j < NFRAMES; ++j) {
         assert_int_equal(rp_hal_grab(src, &g_set), RP_HAL_OK);
         const rp_image_t *img[RP_MAX_CAMS];
+        int64_t cam_utime[RP_MAX_CAMS];
         for (uint8_t k = 0; k < RP_MAX_CAMS; ++k) {
             img[k] = k < g_set.n_cams && g_set.cam[k].img.data != NULL ? &g_set.cam[k].img
                                                                       : NULL;
+            cam_utime[k] = img[k] != NULL ? g_set.cam[k].utime : g_set.utime; /* the daemon's */
         }
         memset(&out[j], 0, sizeof out[j]);
+        const rp_frameset_t *fs = NULL;
         const rp_status_t st =
-            rp_est_step_images(&g_est, img, g_set.n_cams, g_set.utime, &out[j], NULL);
+            rp_est_step_images(&g_est, img, cam_utime, g_set.n_cams, g_set.utime, &out[j], &fs);
         assert_true(st == RP_OK || st == RP_E_TOO_FEW);
+        assert_non_null(fs);
+        assert_true(fs->utime == (int64_t)j * DT_US);
+        for (int k = 0; k < RP_SIM_NCAMS; ++k) {
+            assert_int_equal(fs->cam_dt_us[k], CAM_DT_US(k));
+            assert_int_equal(fs->cam_flags[k], 0);
+        }
     }
     assert_int_equal(rp_hal_grab(src, &g_set), RP_HAL_E_END);
     /* ignored: a started source stops */

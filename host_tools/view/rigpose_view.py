@@ -227,7 +227,8 @@ class View:
               "cameras": {names[k]: {"state": m.cam_state[k], "fps": m.fps[k],
                                      "frames": m.frames[k], "drops": m.drops[k],
                                      "features": m.features[k],
-                                     "features_used": m.features_used[k]} for k in range(n)}}
+                                     "features_used": m.features_used[k],
+                                     "cam_dt_us": m.cam_dt_us[k]} for k in range(n)}}
         self.status.log(st, log_time=t_ns)
 
     def on_image(self, data, t_ns):

@@ -4,10 +4,17 @@
  * The folder (written by rigpose-render, or converted from KITTI / EuRoC by host_tools/research/realdata);
  * cfg.replay_index is the folder (its frames.csv is read) or the index file itself, whatever
  * its name (messages name the file read):
- *   frames.csv  header `utime_us,cam0,cam1,...`, then one row per frame set: the capture time in
+ *   frames.csv  header `utime_us,cam0,cam1,...`, then one row per frame set: the set's time in
  *               microseconds (strictly increasing) and each column's image, a path relative to
  *               the folder (or absolute). Camera i reads the column named cfg.cam[i].device, or
  *               with an empty device the i-th image column.
+ *               Cameras that are not simultaneous: a column `utime_us_<name>`, anywhere after
+ *               utime_us, is the capture time (us) of image column <name> (e.g. utime_us_cam0
+ *               for cam0), which then differs from the row's utime_us by at most 2^31 - 1 us
+ *               (rp_frameset_t.cam_dt_us is an int32_t); an image column without one is at
+ *               utime_us, so a file without them reads as every camera at the set's time.
+ *               Every row has a value in every column; a time that is not an integer, or out
+ *               of range, refuses the row (file:line, the column). Only utime_us must increase.
  *               Blank lines and lines starting with '#' are skipped, however long; any other
  *               line longer than LINE_MAX_CHARS is refused (file:line) and the next grab goes on
  *               after it.
@@ -23,7 +30,9 @@
  * and the set comes at a later grab, so grab never blocks longer than timeout_ms), or with
  * RP_HAL_PACE_LIVE at their recorded times read as HAL clock times (a recording stamped on this
  * host's CLOCK_MONOTONIC plays like live cameras: several processes reading it deliver each set
- * at the same moment, and one started late skips the sets due more than timeout_ms ago). set.utime and each camera's utime are the recorded times; seq is the
+ * at the same moment, and one started late skips the sets due more than timeout_ms ago).
+ * set.utime is the row's utime_us, each camera's utime its utime_us_<name> (else utime_us); pacing
+ * follows utime_us. seq is the
  * row's index among the data rows. With cfg.partial_sets, a row whose image cannot be read for
  * some cameras is delivered with those cameras MISSING (no image) and RP_HAL_OK, the reason
  * (file:line, camera, file, why) left in the source's message; a row none of whose images can be
@@ -47,7 +56,12 @@
 
 #include <png.h>
 
-#define LINE_MAX_CHARS (RP_MAX_CAMS * RP_HAL_PATH_MAX + 64) /* 1600 with the defaults */
+/* A path and a time per camera, and the set's time: 1792 with the defaults */
+#define LINE_MAX_CHARS (RP_MAX_CAMS * (RP_HAL_PATH_MAX + 32) + 64)
+/* Fields of a frames.csv line: utime_us, an image and a time column per camera. */
+#define MAX_FIELDS (2 * RP_MAX_CAMS + 1)
+/* Prefix of a camera's time column: utime_us_<image column>. */
+#define TIME_PREFIX "utime_us_"
 /* Largest |utime_us| of a row: the difference of any two fits int64_t (the estimators take
  * the time between sets as a difference of utimes). */
 #define RP_HAL_UTIME_MAX ((int64_t)1 << 61)
@@ -80,6 +94,10 @@ typedef struct {
     rp_hal_status_t load_st[RP_MAX_CAMS];
     char load_err[RP_MAX_CAMS][RP_HAL_ERR_MAX];
     uint8_t n_cols;              /* image columns in frames.csv */
+    uint8_t n_fields;            /* fields of every line: utime_us, images, times */
+    uint8_t img_field[RP_MAX_CAMS];  /* field of image column j */
+    uint8_t time_field[RP_MAX_CAMS]; /* field of image column j's time (0: none, at utime_us) */
+    char time_name[RP_MAX_CAMS][RP_HAL_PATH_MAX]; /* header name of that time column */
     uint8_t col[RP_MAX_CAMS];    /* camera i's image column */
     uint16_t w[RP_MAX_CAMS], h[RP_MAX_CAMS];
     uint8_t grey[RP_MAX_CAMS][(size_t)RP_HAL_MAX_W * RP_HAL_MAX_H];
@@ -395,6 +413,58 @@ static void replay_close(void *ctx)
     s->open = 0;
 }
 
+/* The header's k fields f (f[0] is utime_us): image columns, and the time column
+ * utime_us_<name> of some of them (rp_hal_replay.c's format). */
+static rp_hal_status_t parse_header(replay_src_t *s, char *f[], unsigned k, const char *csv,
+                                    char *err)
+{
+    const size_t pl = strlen(TIME_PREFIX);
+    if (k > MAX_FIELDS) {
+        return rp_hal_fail(err, RP_HAL_E_FORMAT,
+                           "%s:%u: more than %d image columns and their times", csv,
+                           (unsigned)s->line, RP_MAX_CAMS);
+    }
+    s->n_cols = 0;
+    s->n_fields = (uint8_t)k;
+    for (unsigned i = 1; i < k; i++) {
+        if (strncmp(f[i], TIME_PREFIX, pl) == 0) {
+            continue;
+        }
+        if (s->n_cols == RP_MAX_CAMS) {
+            return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: more than %d image columns", csv,
+                               (unsigned)s->line, RP_MAX_CAMS);
+        }
+        s->time_field[s->n_cols] = 0;
+        s->img_field[s->n_cols++] = (uint8_t)i;
+    }
+    if (s->n_cols == 0) {
+        return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: header must be utime_us,cam0,cam1,...",
+                           csv, (unsigned)s->line);
+    }
+    for (unsigned i = 1; i < k; i++) {
+        if (strncmp(f[i], TIME_PREFIX, pl) != 0) {
+            continue;
+        }
+        unsigned j = 0;
+        while (j < s->n_cols && strcmp(f[s->img_field[j]], f[i] + pl) != 0) {
+            j++;
+        }
+        if (j == s->n_cols) {
+            return rp_hal_fail(err, RP_HAL_E_FORMAT,
+                               "%s:%u: time column '%s' names no image column '%s'", csv,
+                               (unsigned)s->line, f[i], f[i] + pl);
+        }
+        if (s->time_field[j] != 0) {
+            return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: two time columns '%s'", csv,
+                               (unsigned)s->line, f[i]);
+        }
+        s->time_field[j] = (uint8_t)i;
+        /* ignored: a name cut at RP_HAL_PATH_MAX only shortens messages */
+        (void)snprintf(s->time_name[j], sizeof s->time_name[j], "%s", f[i]);
+    }
+    return RP_HAL_OK;
+}
+
 static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *err)
 {
     replay_src_t *s = &g_replay;
@@ -444,9 +514,9 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
                            is_dir ? " (replay_index " : "", is_dir ? idx : "",
                            is_dir ? " is a folder: its frames.csv is read)" : "");
     }
-    char *f[RP_MAX_CAMS + 2];
+    char *f[MAX_FIELDS + 1];
     const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
-    const unsigned k = r > 0 ? split(s->buf, f, RP_MAX_CAMS + 1) : 0;
+    const unsigned k = r > 0 ? split(s->buf, f, MAX_FIELDS) : 0;
     if (r < 0) {
         replay_close(s);
         return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: %s", csv, (unsigned)s->line,
@@ -458,12 +528,11 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
                            "%s:%u: header must be utime_us,cam0,cam1,...", csv,
                            (unsigned)s->line);
     }
-    if (k > RP_MAX_CAMS + 1) {
+    const rp_hal_status_t hst = parse_header(s, f, k, csv, err);
+    if (hst != RP_HAL_OK) {
         replay_close(s);
-        return rp_hal_fail(err, RP_HAL_E_FORMAT, "%s:%u: more than %d image columns", csv,
-                           (unsigned)s->line, RP_MAX_CAMS);
+        return hst;
     }
-    s->n_cols = (uint8_t)(k - 1);
     for (uint8_t i = 0; i < cfg->n_cams; i++) {
         const char *name = cfg->cam[i].device;
         if (memchr(name, '\0', RP_HAL_PATH_MAX) == NULL) {
@@ -473,7 +542,7 @@ static rp_hal_status_t replay_open(void **ctx, const rp_hal_cfg_t *cfg, char *er
         }
         unsigned c = name[0] == '\0' ? i : RP_MAX_CAMS;
         for (unsigned j = 0; j < s->n_cols && name[0] != '\0'; j++) {
-            c = strcmp(f[j + 1], name) == 0 ? j : c;
+            c = strcmp(f[s->img_field[j]], name) == 0 ? j : c;
         }
         if (c >= s->n_cols) {
             replay_close(s);
@@ -565,12 +634,42 @@ static int truth_at(replay_src_t *s, int64_t u)
     return s->truth_have && s->truth_u == u;
 }
 
+/* Each camera's capture time of a row (fields f, the set's time u) into cam_u: its image
+ * column's time column, else u. A time that is not an integer, or more than an int32_t of
+ * microseconds from u, refuses the row (file:line and the column). */
+static rp_hal_status_t cam_times(replay_src_t *s, char *f[], int64_t u, int64_t cam_u[])
+{
+    for (uint8_t i = 0; i < s->cfg.n_cams; i++) {
+        const uint8_t tf = s->time_field[s->col[i]];
+        cam_u[i] = u;
+        if (tf == 0) {
+            continue;
+        }
+        const char *name = s->time_name[s->col[i]];
+        if (!parse_i64(f[tf], &cam_u[i])) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                               "%s:%u: %s '%.40s' is not a time in microseconds", s->index,
+                               (unsigned)s->line, name, f[tf]);
+        }
+        /* |u| <= 2^61 (checked before): the difference is taken only for |cam_u| <= 2^61 */
+        if (cam_u[i] < -RP_HAL_UTIME_MAX || cam_u[i] > RP_HAL_UTIME_MAX ||
+            cam_u[i] - u < INT32_MIN || cam_u[i] - u > INT32_MAX) {
+            return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
+                               "%s:%u: %s %" PRId64 " more than 2^31 - 1 us (35 min) from "
+                               "utime_us %" PRId64, s->index, (unsigned)s->line, name,
+                               cam_u[i], u);
+        }
+    }
+    return RP_HAL_OK;
+}
+
 /* Reads and loads the next row into the ready set (s->ready). */
 static rp_hal_status_t read_row(replay_src_t *s)
 {
     const uint8_t n = s->cfg.n_cams;
-    char *f[RP_MAX_CAMS + 2];
+    char *f[MAX_FIELDS + 1];
     int64_t u = 0;
+    int64_t cam_u[RP_MAX_CAMS];
     uint32_t row = 0;
     for (;;) {
         const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
@@ -582,12 +681,14 @@ static rp_hal_status_t read_row(replay_src_t *s)
             return rp_hal_fail(s->err, RP_HAL_E_FORMAT, "%s:%u: %s", s->index,
                                (unsigned)s->line, line_why(r));
         }
-        const unsigned k = split(s->buf, f, RP_MAX_CAMS + 1);
+        const unsigned k = split(s->buf, f, MAX_FIELDS);
         u = 0;
-        if (k != (unsigned)s->n_cols + 1 || !parse_i64(f[0], &u)) {
+        if (k != s->n_fields || !parse_i64(f[0], &u)) {
+            const unsigned n_times = (unsigned)s->n_fields - 1u - s->n_cols;
             return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
-                               "%s:%u: want utime_us and %u image paths", s->index,
-                               (unsigned)s->line, (unsigned)s->n_cols);
+                               "%s:%u: want utime_us and %u image paths%s", s->index,
+                               (unsigned)s->line, (unsigned)s->n_cols,
+                               n_times > 0 ? " and their times" : "");
         }
         if (u < -RP_HAL_UTIME_MAX || u > RP_HAL_UTIME_MAX) {
             return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
@@ -599,6 +700,10 @@ static rp_hal_status_t read_row(replay_src_t *s)
             return rp_hal_fail(s->err, RP_HAL_E_FORMAT,
                                "%s:%u: utime_us %" PRId64 " not after %" PRId64, s->index,
                                (unsigned)s->line, u, s->last_u);
+        }
+        const rp_hal_status_t tst = cam_times(s, f, u, cam_u);
+        if (tst != RP_HAL_OK) {
+            return tst;
         }
         s->any_row = 1;
         s->last_u = u;
@@ -615,7 +720,7 @@ static rp_hal_status_t read_row(replay_src_t *s)
     rp_hal_status_t first_bad = RP_HAL_OK;
     s->ready_msg[0] = '\0';
     for (uint8_t i = 0; i < n; i++) {
-        s->rel[i] = f[s->col[i] + 1];
+        s->rel[i] = f[s->img_field[s->col[i]]];
     }
     if (s->cfg.run_jobs == NULL || s->cfg.run_jobs(s->cfg.run_jobs_ctx, n, load_job, s) != 0) {
         for (uint8_t i = 0; i < n; i++) {
@@ -662,7 +767,7 @@ static rp_hal_status_t read_row(replay_src_t *s)
         fr->img.h = s->h[i];
         fr->img.stride = s->w[i];
         fr->img.size = (uint32_t)s->w[i] * s->h[i];
-        fr->utime = u;
+        fr->utime = cam_u[i];
         fr->seq = row;
         fr->flags = RP_HAL_CAM_OK;
     }

@@ -64,6 +64,11 @@ def replay_index():
     put("replay_index", "crlf_named", "utime_us,cam1,cam0\r\n10,b.png,a.pgm\r\n20,a.pgm,b.png\r\n")
     put("replay_index", "paced", "#rt paced at 1 ms\nutime_us,cam0,cam1\n1000,a.pgm,b.png\n"
         "1500,b.png,a.pgm\n2000,a.pgm,a.pgm\n")
+    # per-camera capture times (utime_us_<column>), one of them malformed, one too far
+    put("replay_index", "camera_times",
+        "utime_us,cam0,utime_us_cam1,cam1,utime_us_cam0\n1000,a.pgm,1012,b.png,990\n"
+        "2000,b.png,1975,a.pgm,2040\n3000,a.pgm,x,b.png,3000\n"
+        "4000,a.pgm,2147487648,b.png,4000\n5000,a.pgm,-5000,b.png,5001\n")
 
 
 def image():

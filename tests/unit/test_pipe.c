@@ -4,7 +4,8 @@
  * stereo matching and the estimators; the pose follows the known motion for stereo4, stereo2
  * and gc; pairs share ids; a missing, blank, truncated or wrongly sized image degrades the step
  * with its state instead of failing it; bad calls give their status. Feature-level input
- * (rp_pipe_step_feats) is the layout's estimator on the simulation's frame sets.
+ * (rp_pipe_step_feats) is the layout's estimator on the simulation's frame sets. Cameras with
+ * their own capture times (rp_pipe_step_timed) carry them into the frame set and trackers.
  */
 #include <string.h>
 #include <time.h>
@@ -525,6 +526,159 @@ static void test_phased_step_is_the_step(void **state)
     assert_status(rp_pipe_tracker_cam(&pipe2, 0, NULL), RP_E_ARG);
 }
 
+/* Cameras with their own capture times (rp_pipe_step_timed, rp_pipe_cam_time). Given every
+ * camera stamped at the set's time, stereo4 and gc give bit for bit rp_pipe_step's estimates
+ * and a frame set with cam_dt_us all 0. Given times 5 ms apart (some before the set's time),
+ * the frame set carries each camera's difference, each tracker its camera's time, and a camera
+ * without an image is flagged RP_FS_NO_IMAGE with its time not read (INT64_MIN there is no
+ * error). A time 2^31 us away is refused with RP_E_RANGE before anything is done (the report,
+ * the frame set and the time order unchanged; 2^31 - 1 us is taken); the phased call refuses
+ * a camera outside the rig, a step not begun or already estimated, and the int64 ends. */
+static void test_camera_times(void **state)
+{
+    (void)state;
+    static const rp_pipe_layout_t layouts[2] = {RP_PIPE_STEREO4, RP_PIPE_GC};
+    for (int li = 0; li < 2; ++li) {
+        rp_pipe_cfg_t cfg;
+        assert_ok(rp_pipe_default_cfg(layouts[li], &cfg));
+        cfg.gc.init_depth_m = RP_C(1.2);
+        cfg.gc.init_depth_sigma_m = RP_C(0.3);
+        cfg.gc.init_on_sphere = 1;
+        assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+        assert_ok(rp_pipe_init(&pipe2, &rig, &cfg));
+        for (int j = 0; j < 6; ++j) {
+            rp_image_t im[NCAM];
+            const rp_image_t *ptr[NCAM];
+            int64_t t[NCAM];
+            for (int k = 0; k < NCAM; ++k) {
+                im[k] = fx_image(frames[j][k], W, H);
+                ptr[k] = &im[k];
+                t[k] = (int64_t)j * DT_US;
+            }
+            rp_estimate_t a, b;
+            const rp_status_t sa = rp_pipe_step(&pipe, ptr, NCAM, (int64_t)j * DT_US, &a);
+            const rp_status_t sb =
+                rp_pipe_step_timed(&pipe2, ptr, t, NCAM, (int64_t)j * DT_US, &b);
+            assert_int_equal(sa, sb);
+            assert_memory_equal(a.p, b.p, sizeof a.p);
+            assert_memory_equal(a.cov, b.cov, sizeof a.cov);
+            assert_int_equal(a.flags, b.flags);
+            const rp_frameset_t *fs;
+            assert_ok(rp_pipe_frameset(&pipe2, &fs));
+            for (int k = 0; k < NCAM; ++k) {
+                assert_int_equal(fs->cam_dt_us[k], 0);
+                assert_int_equal(fs->cam_flags[k], 0);
+            }
+        }
+    }
+
+    /* gc on cameras 0..3, each 5 ms after the previous one, the set's time between them;
+     * camera 2 without an image */
+    rp_pipe_cfg_t cfg;
+    assert_ok(rp_pipe_default_cfg(RP_PIPE_GC, &cfg));
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    rp_image_t im[NCAM];
+    const rp_image_t *ptr[NCAM];
+    int64_t t[NCAM];
+    const int64_t u = 1000000;
+    for (int k = 0; k < NCAM; ++k) {
+        im[k] = fx_image(frames[0][k], W, H);
+        ptr[k] = &im[k];
+        t[k] = u - 7000 + 5000 * k;
+    }
+    ptr[2] = NULL;
+    t[2] = INT64_MIN; /* not read: no image */
+    rp_estimate_t est;
+    assert_ok(rp_pipe_step_timed(&pipe, ptr, t, NCAM, u, &est));
+    const rp_frameset_t *fs;
+    const rp_pipe_info_t *info;
+    assert_ok(rp_pipe_frameset(&pipe, &fs));
+    assert_ok(rp_pipe_info(&pipe, &info));
+    assert_true(fs->utime == u);
+    static const int32_t want_dt[NCAM] = {-7000, -2000, 0, 8000, 13000, 18000};
+    for (int k = 0; k < NCAM; ++k) {
+        assert_int_equal(fs->cam_dt_us[k], want_dt[k]);
+        assert_int_equal(fs->cam_flags[k], k == 2 ? RP_FS_NO_IMAGE : 0);
+    }
+    assert_int_equal(info->cam_state[2], RP_PIPE_CAM_MISSING);
+    for (uint8_t tr = 0; tr < rp_pipe_n_trackers(&pipe); ++tr) {
+        uint8_t cam;
+        assert_ok(rp_pipe_tracker_cam(&pipe, tr, &cam));
+        if (cam != 2) { /* a tracker without an image keeps its last image's time */
+            assert_true(pipe.trk[tr].utime == t[cam]);
+        }
+    }
+
+    /* a time that does not fit: nothing done */
+    t[2] = u + DT_US;
+    t[3] = u + DT_US + ((int64_t)1 << 31);
+    ptr[2] = &im[2];
+    assert_status(rp_pipe_step_timed(&pipe, ptr, t, NCAM, u + DT_US, &est), RP_E_RANGE);
+    assert_true(est.flags & RP_EST_LOST);
+    assert_int_equal(info->frame, 1);
+    assert_int_equal(fs->cam_dt_us[0], -7000);
+    assert_int_equal(fs->cam_flags[2], RP_FS_NO_IMAGE);
+    t[3] = u + DT_US - ((int64_t)1 << 31) - 1;
+    assert_status(rp_pipe_step_timed(&pipe, ptr, t, NCAM, u + DT_US, &est), RP_E_RANGE);
+    t[3] = u + DT_US + INT32_MAX;
+    t[1] = u + DT_US + INT32_MIN;
+    /* the same time again, now taken (whatever the estimator makes of 35 min) */
+    const rp_status_t st = rp_pipe_step_timed(&pipe, ptr, t, NCAM, u + DT_US, &est);
+    assert_true(st != RP_E_RANGE && st != RP_E_ARG);
+    assert_int_equal(info->frame, 2);
+    assert_int_equal(fs->cam_dt_us[3], INT32_MAX);
+    assert_int_equal(fs->cam_dt_us[1], INT32_MIN);
+    assert_int_equal(fs->cam_flags[2], 0);
+    assert_status(rp_pipe_step_timed(NULL, ptr, t, NCAM, u, &est), RP_E_ARG);
+    assert_status(rp_pipe_step_timed(&pipe, ptr, t, RP_MAX_CAMS + 1, u, &est), RP_E_ARG);
+
+    /* phased: the time set before a camera's tracking is its tracker's */
+    assert_status(rp_pipe_cam_time(&pipe, 0, u), RP_E_ARG); /* no step begun */
+    const int64_t u3 = u + 3 * DT_US;
+    assert_ok(rp_pipe_begin(&pipe, u3, NULL));
+    assert_ok(rp_pipe_cam_time(&pipe, 1, u3 + 250));
+    assert_ok(rp_pipe_cam_time(&pipe, 5, u3 - 250)); /* a rig camera outside the layout */
+    assert_status(rp_pipe_cam_time(&pipe, NCAM, u3), RP_E_ARG);
+    assert_status(rp_pipe_cam_time(&pipe, RP_MAX_CAMS, u3), RP_E_ARG);
+    assert_status(rp_pipe_cam_time(NULL, 0, u3), RP_E_ARG);
+    assert_status(rp_pipe_cam_time(&pipe, 1, INT64_MIN), RP_E_RANGE);
+    assert_status(rp_pipe_cam_time(&pipe, 1, INT64_MAX), RP_E_RANGE);
+    for (uint8_t tr = 0; tr < rp_pipe_n_trackers(&pipe); ++tr) {
+        assert_ok(rp_pipe_track(&pipe, tr, ptr, NCAM));
+    }
+    assert_ok(rp_pipe_match(&pipe));
+    assert_ok(rp_pipe_cam_time(&pipe, 0, u3 - 100)); /* after tracking: the frame set's only */
+    assert_ok(rp_pipe_frameset(&pipe, &fs));
+    assert_int_equal(fs->cam_dt_us[0], -100);
+    assert_int_equal(fs->cam_dt_us[1], 250);
+    assert_int_equal(fs->cam_dt_us[2], 0);
+    assert_int_equal(fs->cam_dt_us[5], -250);
+    assert_true(pipe.trk[pipe.cam_trk[1]].utime == u3 + 250);
+    assert_true(pipe.trk[pipe.cam_trk[0]].utime == u3);
+    assert_true(rp_pipe_estimate(&pipe, &est) != RP_E_ARG);
+    assert_status(rp_pipe_cam_time(&pipe, 0, u3), RP_E_ARG); /* estimated */
+
+    /* the int64 ends do not overflow the difference */
+    int32_t dt = 7;
+    assert_status(rp_pipe_cam_dt(INT64_MIN, INT64_MAX, &dt), RP_E_RANGE);
+    assert_status(rp_pipe_cam_dt(INT64_MAX, INT64_MIN, &dt), RP_E_RANGE);
+    assert_status(rp_pipe_cam_dt(0, INT32_MIN, &dt), RP_E_RANGE); /* 2^31 */
+    assert_int_equal(dt, 7);
+    assert_ok(rp_pipe_cam_dt(INT64_MIN, INT64_MIN + INT32_MAX, &dt));
+    assert_int_equal(dt, -INT32_MAX);
+    assert_ok(rp_pipe_cam_dt(-5, 7, &dt));
+    assert_int_equal(dt, -12);
+    assert_status(rp_pipe_cam_dt(0, 0, NULL), RP_E_ARG);
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    assert_ok(rp_pipe_begin(&pipe, INT64_MAX - 10, NULL));
+    assert_status(rp_pipe_cam_time(&pipe, 0, INT64_MIN), RP_E_RANGE);
+    assert_ok(rp_pipe_cam_time(&pipe, 0, INT64_MAX));
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    assert_ok(rp_pipe_begin(&pipe, INT64_MIN + 10, NULL));
+    assert_status(rp_pipe_cam_time(&pipe, 0, INT64_MAX), RP_E_RANGE);
+    assert_ok(rp_pipe_cam_time(&pipe, 0, INT64_MIN));
+}
+
 /* Given trackers that would top up at every frame set (threshold = target), then in gc (4
  * detecting trackers) and stereo4 (2: the pairs' first cameras) only the tracker whose turn it
  * is tops up: the d-th detecting one on frame sets d modulo their count (rp_pipe.h); every
@@ -650,6 +804,7 @@ int main(void)
         cmocka_unit_test(test_bad_images_give_states),
         cmocka_unit_test(test_bad_calls),
         cmocka_unit_test(test_phased_step_is_the_step),
+        cmocka_unit_test(test_camera_times),
         cmocka_unit_test(test_topups_take_turns),
         cmocka_unit_test(test_step_feats_is_the_layouts_estimator),
     };

@@ -193,8 +193,9 @@ rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg);
 rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg_t *cfg);
 
 /* Process one frame set: images[k] is rig camera k's image taken at utime (us), for
- * k < n (n <= RP_MAX_CAMS); a NULL entry, or k >= n, means camera k has no image this time.
- * Cameras not in the layout are ignored. est (required) receives the estimate.
+ * k < n (n <= RP_MAX_CAMS); a NULL entry, or k >= n, means camera k has no image this time
+ * (the frame set flags it RP_FS_NO_IMAGE). Cameras not in the layout are ignored. est
+ * (required) receives the estimate. Cameras with their own capture times: rp_pipe_step_timed.
  * Returns:
  *   RP_OK           the estimator ran and updated (est->flags: RP_EST_INITIALISING on the
  *                   first frame set, RP_EST_TRACKING, RP_EST_REINIT ...). A camera of the
@@ -220,10 +221,30 @@ rp_status_t rp_pipe_init(rp_pipe_t *pipe, const rp_rig_t *rig, const rp_pipe_cfg
 rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
                          int64_t utime, rp_estimate_t *est);
 
+/* rp_pipe_step for cameras that are not simultaneous: cam_utime[k] (us) is camera k's own
+ * capture time of images[k], for k < n; utime stays the set's time (the estimator's state
+ * time; rp_frame.h). cam_utime NULL: every camera at utime, which is rp_pipe_step exactly.
+ * Entries of cameras without an image (NULL, or k >= the rig's cameras) are not read. Each
+ * camera's tracker gets its own time and the frame set carries cam_dt_us[k] = cam_utime[k] -
+ * utime (rp_pipe_cam_time). Returns as rp_pipe_step, and
+ *   RP_E_RANGE  a camera's time differs from utime by more than an int32_t of microseconds
+ *               (35 min: a broken stamp), checked before anything else is done: est = last
+ *               estimate with RP_EST_LOST, as for a utime not after the previous one. */
+/* A camera's capture time relative to its set's: *dt_us = cam_utime - utime (us), computed
+ * without overflow. RP_OK, RP_E_RANGE (does not fit an int32_t: *dt_us untouched) or RP_E_ARG
+ * (dt_us NULL). What rp_pipe_cam_time and rp_pipe_step_timed check; for callers that build
+ * frame sets themselves (rp_frameset_t.cam_dt_us). */
+rp_status_t rp_pipe_cam_dt(int64_t cam_utime, int64_t utime, int32_t *dt_us);
+
+rp_status_t rp_pipe_step_timed(rp_pipe_t *pipe, const rp_image_t *const images[],
+                               const int64_t cam_utime[], uint8_t n, int64_t utime,
+                               rp_estimate_t *est);
+
 /* The same step in phases, for a caller that runs the cameras' trackers in parallel (one
- * thread per camera; core/ itself starts no thread). rp_pipe_step is exactly
- *   rp_pipe_begin; rp_pipe_track for t = 0 .. rp_pipe_n_trackers - 1; rp_pipe_match (which
- *   is rp_pipe_match_pair for k = 0 .. rp_pipe_n_pairs - 1); rp_pipe_estimate
+ * thread per camera; core/ itself starts no thread). rp_pipe_step_timed is exactly
+ *   rp_pipe_begin; rp_pipe_cam_time for each camera with an image (cam_utime not NULL);
+ *   rp_pipe_track for t = 0 .. rp_pipe_n_trackers - 1; rp_pipe_match (which is
+ *   rp_pipe_match_pair for k = 0 .. rp_pipe_n_pairs - 1); rp_pipe_estimate
  * and the result does not depend on the order or the threads the rp_pipe_track calls run on:
  * tracker t reads and writes only its own tracker and its camera's entries of the frame set
  * and of the report, so the calls for distinct t may run concurrently (each t once per step,
@@ -235,9 +256,17 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
  *   (utime not after the previous step's: nothing started) or RP_E_ARG (NULL or not
  *   initialised). A step begun and never estimated is dropped by the next rp_pipe_begin (or
  *   rp_pipe_step, rp_pipe_step_feats); its trackers have moved on.
+ * rp_pipe_cam_time: camera cam's own capture time utime_us (us) in the step begun (cameras
+ *   that are not simultaneous; rp_pipe_step_timed): the frame set's cam_dt_us[cam] = utime_us -
+ *   the step's utime. Call it before the camera's rp_pipe_track, whose tracker then gets that
+ *   time (a later call still sets the frame set's entry, the tracker keeps the set's time); a
+ *   camera without a call is at the step's utime. Returns RP_OK, RP_E_ARG (NULL, not
+ *   initialised, no step begun or already estimated, cam not a camera of the rig) or
+ *   RP_E_RANGE (the difference does not fit an int32_t: nothing changed).
  * rp_pipe_track: tracker t (0 .. rp_pipe_n_trackers - 1) on its camera's image in images (as
- *   rp_pipe_step takes them). The outcome is in the camera's report (rp_pipe_info); the status
- *   is RP_OK, or RP_E_ARG (no step begun, t out of range, images NULL, n > RP_MAX_CAMS).
+ *   rp_pipe_step takes them), at the camera's time (rp_pipe_cam_time). The outcome is in the
+ *   camera's report (rp_pipe_info); the status is RP_OK, or RP_E_ARG (no step begun, t out of
+ *   range, images NULL, n > RP_MAX_CAMS).
  * rp_pipe_match: stereo matching of the pairs' new features (stereo layouts; nothing for the
  *   others), of every pair not matched yet by rp_pipe_match_pair. After it rp_pipe_frameset
  *   holds the frame set the estimator will see. RP_E_ARG if no step is begun.
@@ -248,6 +277,7 @@ rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint
  * rp_pipe_estimate: the layout's estimator on the frame set; returns as rp_pipe_step does, or
  *   RP_E_ARG (est NULL, or not matched) with est, if given, zeroed and LOST. */
 rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est);
+rp_status_t rp_pipe_cam_time(rp_pipe_t *pipe, uint8_t cam, int64_t utime_us);
 rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const images[],
                           uint8_t n);
 rp_status_t rp_pipe_match_pair(rp_pipe_t *pipe, uint8_t k);

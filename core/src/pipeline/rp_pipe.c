@@ -11,6 +11,7 @@
 #include "rigpose/rp_pipe.h"
 
 #include <stddef.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "priv/rp_math.h"
@@ -454,6 +455,33 @@ rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est)
     return RP_OK;
 }
 
+rp_status_t rp_pipe_cam_dt(int64_t cam_utime, int64_t utime, int32_t *dt_us)
+{
+    if (dt_us == NULL) {
+        return RP_E_ARG;
+    }
+    /* cam_utime - utime overflows int64_t exactly when these hold */
+    if ((utime < 0 && cam_utime > INT64_MAX + utime) ||
+        (utime > 0 && cam_utime < INT64_MIN + utime)) {
+        return RP_E_RANGE;
+    }
+    const int64_t d = cam_utime - utime;
+    if (d < INT32_MIN || d > INT32_MAX) {
+        return RP_E_RANGE;
+    }
+    *dt_us = (int32_t)d;
+    return RP_OK;
+}
+
+rp_status_t rp_pipe_cam_time(rp_pipe_t *pipe, uint8_t cam, int64_t utime_us)
+{
+    if (pipe == NULL || pipe->magic != RP_PIPE_MAGIC || pipe->in_step == 0 ||
+        cam >= pipe->rig->n_cams) {
+        return RP_E_ARG;
+    }
+    return rp_pipe_cam_dt(utime_us, pipe->fs.utime, &pipe->fs.cam_dt_us[cam]);
+}
+
 rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const images[],
                           uint8_t n)
 {
@@ -462,7 +490,7 @@ rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const im
         return RP_E_ARG;
     }
     const uint8_t cam = pipe->trk_cam[t];
-    track_one(pipe, t, cam < n ? images[cam] : NULL, pipe->fs.utime);
+    track_one(pipe, t, cam < n ? images[cam] : NULL, pipe->fs.utime + pipe->fs.cam_dt_us[cam]);
     return RP_OK;
 }
 
@@ -537,15 +565,43 @@ rp_status_t rp_pipe_estimate(rp_pipe_t *pipe, rp_estimate_t *est)
     return taken == 0 ? RP_E_DEGENERATE : st;
 }
 
+/* Camera k has an image in images[0..n-1] whose time the step takes (a camera of the rig). */
+static int timed_image(const rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t k)
+{
+    return k < pipe->rig->n_cams && images[k] != NULL && images[k]->data != NULL;
+}
+
 rp_status_t rp_pipe_step(rp_pipe_t *pipe, const rp_image_t *const images[], uint8_t n,
                          int64_t utime, rp_estimate_t *est)
 {
-    if (images == NULL || n > RP_MAX_CAMS || est == NULL) {
+    return rp_pipe_step_timed(pipe, images, NULL, n, utime, est);
+}
+
+rp_status_t rp_pipe_step_timed(rp_pipe_t *pipe, const rp_image_t *const images[],
+                               const int64_t cam_utime[], uint8_t n, int64_t utime,
+                               rp_estimate_t *est)
+{
+    if (images == NULL || n > RP_MAX_CAMS || est == NULL || pipe == NULL ||
+        pipe->magic != RP_PIPE_MAGIC) {
         /* ignored: RP_E_ARG whatever the pipe; it fills est, if given, as rp_pipe.h says */
         (void)step_begin(pipe, 0, utime, est);
         return RP_E_ARG;
     }
+    for (uint8_t k = 0; cam_utime != NULL && k < n; ++k) {
+        int32_t dt;
+        if (timed_image(pipe, images, k) && rp_pipe_cam_dt(cam_utime[k], utime, &dt) != RP_OK) {
+            *est = pipe->last; /* nothing done, as for a utime out of order */
+            est->flags |= RP_EST_LOST;
+            return RP_E_RANGE;
+        }
+    }
     rp_status_t st = rp_pipe_begin(pipe, utime, est);
+    for (uint8_t k = 0; st == RP_OK && cam_utime != NULL && k < n; ++k) {
+        if (timed_image(pipe, images, k)) {
+            /* ignored: the step is begun, k a camera of the rig, the time checked above */
+            (void)rp_pipe_cam_time(pipe, k, cam_utime[k]);
+        }
+    }
     for (uint8_t t = 0; st == RP_OK && t < pipe->n_trk; ++t) {
         st = rp_pipe_track(pipe, t, images, n);
     }

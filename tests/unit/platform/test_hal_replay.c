@@ -3,7 +3,8 @@
  * test writes: PGM and PNG images, truth, pacing, and each kind of bad input with its error:
  * lines of any length (comments skipped whole, long rows refused naming file:line), FIFOs,
  * devices and folders listed as images refused without blocking, a missing image costing only
- * its camera, pacing at the ends of int64, control characters escaped in messages.
+ * its camera, pacing at the ends of int64, control characters escaped in messages; each
+ * camera's own capture time (utime_us_<column>) and its malformed values.
  */
 #include <stdint.h>
 #include <stdlib.h>
@@ -441,7 +442,7 @@ static void assert_printable(const char *msg)
 }
 
 /* Comments are skipped whole however long (a 100 KB one, and one whose tail beyond 1,599
- * characters is a valid row); a data row longer than the limit, or with a NUL byte, is refused
+ * characters is a valid row; rows may have 1,791); a data row longer than the limit, or with a NUL byte, is refused
  * naming file:line, and the next grab goes on with the next row. */
 static void test_replay_lines_of_any_length(void **state)
 {
@@ -480,7 +481,7 @@ static void test_replay_lines_of_any_length(void **state)
     }
     assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
     printf("long row: %s\n", rp_hal_errmsg(src));
-    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:7: line longer than 1599 characters"));
+    assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:7: line longer than 1791 characters"));
     assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
     assert_true(set.utime == 50);
     assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
@@ -660,6 +661,137 @@ static void test_replay_missing_image_one_camera(void **state)
     rp_hal_close(src);
 }
 
+/* Per-camera capture times: utime_us_<column> columns, anywhere after utime_us, give each
+ * camera's utime; a column without one (depth) is at the set's utime_us, which stays set.utime.
+ * Differences of -2^31 and 2^31 - 1 us are taken. With partial_sets a camera whose image cannot
+ * be read is MISSING (no image) whatever its time. */
+static void test_replay_camera_times(void **state)
+{
+    (void)state;
+    write_pgm("l.pgm", 1, W, H);
+    write_pgm("r.pgm", 2, W, H);
+    write_pgm("d.pgm", 3, W, H);
+    write_file("frames.csv", "utime_us,left,utime_us_right,right,utime_us_left,depth\n"
+                             "1000,l.pgm,1012,r.pgm,990,d.pgm\n"
+                             "# a camera 25 ms early, another 40 ms late\n"
+                             "34333, l.pgm , 74333 ,r.pgm, 9333 ,d.pgm\r\n"
+                             "67666,l.pgm,2147551313,r.pgm,-2147415982,d.pgm\n"
+                             "100000,l.pgm,100001,gone.pgm,99999,d.pgm\n");
+    rp_hal_cfg_t cfg = replay_cfg(3);
+    cfg.partial_sets = 1;
+    snprintf(cfg.cam[0].device, sizeof cfg.cam[0].device, "left");
+    snprintf(cfg.cam[1].device, sizeof cfg.cam[1].device, "right");
+    snprintf(cfg.cam[2].device, sizeof cfg.cam[2].device, "depth");
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    static const int64_t want[4][4] = {{1000, 990, 1012, 1000},
+                                       {34333, 9333, 74333, 34333},
+                                       {67666, 67666 - 2147483648LL, 67666 + 2147483647LL, 67666},
+                                       {100000, 99999, 0, 100000}};
+    for (int j = 0; j < 4; j++) {
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_true(set.utime == want[j][0]);
+        for (int i = 0; i < 3; i++) {
+            if (set.cam[i].utime != want[j][1 + i]) {
+                fail_msg("row %d camera %d: utime %lld, want %lld", j, i,
+                         (long long)set.cam[i].utime, (long long)want[j][1 + i]);
+            }
+            if (j < 3 || i != 1) {
+                check_image(&set.cam[i], i + 1);
+            }
+        }
+    }
+    assert_int_equal(set.cam[1].flags, RP_HAL_CAM_MISSING);
+    assert_null(set.cam[1].img.data);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+    rp_hal_close(src);
+
+    /* by position: the first image column is camera 0, whatever the time columns between */
+    write_file("frames.csv", "utime_us,utime_us_cam1,cam0,cam1\n10,13,l.pgm,r.pgm\n");
+    rp_hal_cfg_t pos = replay_cfg(2);
+    assert_int_equal(rp_hal_open(&src, &pos), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+    check_image(&set.cam[0], 1);
+    check_image(&set.cam[1], 2);
+    assert_true(set.utime == 10 && set.cam[0].utime == 10 && set.cam[1].utime == 13);
+    rp_hal_close(src);
+}
+
+/* Malformed per-camera times: a header whose time column names no image column, or one
+ * twice, or with only time columns, or more than RP_MAX_CAMS image columns, is refused at open
+ * (file:1); a row whose time is not an integer (text, empty, a fraction, an exponent, beyond
+ * int64), beyond +-2^61 us, or more than an int32_t of microseconds from utime_us, is refused
+ * naming file:line and the column, and the next grab goes on with the next row (the refused
+ * row's utime_us is not taken: the next row may repeat it). */
+static void test_replay_camera_times_malformed(void **state)
+{
+    (void)state;
+    write_pgm("x.pgm", 0, W, H);
+    rp_hal_cfg_t cfg = replay_cfg(2);
+    rp_hal_source_t *src;
+    rp_hal_set_t set;
+    static const char *const bad_headers[5][2] = {
+        {"utime_us,cam0,cam1,utime_us_cam2\n", "time column 'utime_us_cam2' names no image "
+                                               "column 'cam2'"},
+        {"utime_us,cam0,utime_us_cam0,cam1,utime_us_cam0\n", "two time columns 'utime_us_cam0'"},
+        {"utime_us,utime_us_cam0\n", "header must be utime_us,cam0,cam1"},
+        {"utime_us,a,b,c,d,e,f,g\n", "more than 6 image columns"},
+        {"utime_us,a,b,c,d,e,f,utime_us_a,utime_us_b,utime_us_c,utime_us_d,utime_us_e,"
+         "utime_us_f,utime_us_g\n", "more than 6 image columns and their times"}};
+    for (int k = 0; k < 5; k++) {
+        write_file("frames.csv", bad_headers[k][0]);
+        assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_E_FORMAT);
+        printf("bad header %d: %s\n", k, rp_hal_errmsg(NULL));
+        assert_non_null(strstr(rp_hal_errmsg(NULL), "frames.csv:1: "));
+        assert_non_null(strstr(rp_hal_errmsg(NULL), bad_headers[k][1]));
+    }
+
+    static const char *const bad_times[9][2] = {
+        {"abc", "utime_us_cam1 'abc' is not a time"},
+        {"", "utime_us_cam1 '' is not a time"},
+        {"20.5", "utime_us_cam1 '20.5' is not a time"},
+        {"2e3", "utime_us_cam1 '2e3' is not a time"},
+        {"99999999999999999999", "is not a time"},
+        {"2305843009213693953", "utime_us_cam1 2305843009213693953 more than 2^31 - 1 us"},
+        {"2147483668", "utime_us_cam1 2147483668 more than 2^31 - 1 us (35 min) from utime_us 20"},
+        {"-2147483629", "utime_us_cam1 -2147483629 more than 2^31 - 1 us"},
+        {"\x1b[31m", "utime_us_cam1 '\\x1b[31m' is not a time"}};
+    for (int k = 0; k < 9; k++) {
+        char text[256];
+        snprintf(text, sizeof text,
+                 "utime_us,cam0,cam1,utime_us_cam1\n10,x.pgm,x.pgm,11\n20,x.pgm,x.pgm,%s\n"
+                 "20,x.pgm,x.pgm,19\n",
+                 bad_times[k][0]);
+        write_file("frames.csv", text);
+        assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+        assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_true(set.cam[1].utime == 11);
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+        printf("bad time %d: %s\n", k, rp_hal_errmsg(src));
+        assert_non_null(strstr(rp_hal_errmsg(src), "frames.csv:3: "));
+        assert_non_null(strstr(rp_hal_errmsg(src), bad_times[k][1]));
+        assert_printable(rp_hal_errmsg(src));
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
+        assert_true(set.utime == 20 && set.cam[0].utime == 20 && set.cam[1].utime == 19);
+        assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_END);
+        rp_hal_close(src);
+    }
+
+    /* a row short of its time column */
+    write_file("frames.csv", "utime_us,cam0,cam1,utime_us_cam1\n10,x.pgm,x.pgm\n");
+    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
+    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
+    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_E_FORMAT);
+    printf("short row: %s\n", rp_hal_errmsg(src));
+    assert_non_null(strstr(rp_hal_errmsg(src),
+                           "frames.csv:2: want utime_us and 2 image paths and their times"));
+    rp_hal_close(src);
+}
+
 /* 2,000 corrupted copies of a small frames.csv (1..6 bytes each replaced by a random byte, a
  * comma, a newline, '#', NUL, a path separator...; a fixed seed), each opened and grabbed to its
  * end: every failure has a printable message naming frames.csv, nothing crashes (ASan, UBSan)
@@ -771,6 +903,9 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_replay_malformed_csv, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_malformed_images, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_named_columns, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_camera_times, setup_dir, remove_dir),
+        cmocka_unit_test_setup_teardown(test_replay_camera_times_malformed, setup_dir,
+                                        remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_index_file_by_name, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_realtime, setup_dir, remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_live, setup_dir, remove_dir),
