@@ -36,7 +36,8 @@ extern "C" {
  * puts there (rp_ekf.h); before the filter has a rate (its first frame set; stereo: its first
  * two, whose landmarks come before the update) that pose is known to |delta| times the start
  * sigmas only, so a camera farther than this from the state's time makes no landmarks then
- * (s): 1 ms at RP_VO_START_SIGMA_W is 0.8 px at 800 px focal length, the pixel noise's size. */
+ * (s): 1 ms at RP_VO_START_SIGMA_W is 0.8 px at 800 px focal length, the pixel noise's size.
+ * When no camera of the layout is that near, all start, each as if at the state's time. */
 #define RP_VO_START_SKEW_S RP_C(0.001)
 #define RP_VO_ORIGIN_VAR RP_C(1e-12)   /* variance of the pose at the first frame set (zero by
                                         * definition; kept positive definite), m^2 and rad^2 */

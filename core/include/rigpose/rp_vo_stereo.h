@@ -97,6 +97,8 @@ typedef struct {
                                          * pair or of all (rp_vo_stereo.c, predict_update) */
     uint32_t n_refound;                 /* of those, poses re-found by rig RANSAC */
     uint8_t skewed;                     /* this step: a pair refused (max_pair_skew_s) */
+    uint8_t start_near;                 /* first frame set: a pair was at the state's time
+                                         * (RP_VO_START_SKEW_S) */
     rp_ransac_t rs;                     /* rig RANSAC's generator and scratch */
     rp_ekf1pt_t op;                     /* 1-point RANSAC's generator and scratch */
     uint8_t inl[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: RANSAC's inliers */

@@ -365,11 +365,18 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
     (void)rp_vo_ekf_at_origin(&vo->ekf, &vo->cfg.ekf);
     rp_vo_gc_scale_reset(vo);
     uint32_t flags = RP_EST_INITIALISING;
+    /* a camera not at the state's time waits for the filter's rate (RP_VO_START_SKEW_S), unless
+     * none is: then all start here, each as if at the state's time */
+    uint8_t any_near = 0;
     for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
         const uint8_t cam = vo->cfg.cams[k];
-        /* a camera not at the state's time waits for the filter's rate (RP_VO_START_SKEW_S) */
         const rp_real d = (rp_real)fs->cam_dt_us[cam] * RP_C(1e-6) + vo->ekf.toff[cam];
-        if (rp_fabs(d) <= RP_VO_START_SKEW_S) {
+        any_near = (uint8_t)(any_near | (fs->n[cam] > 0 && rp_fabs(d) <= RP_VO_START_SKEW_S));
+    }
+    for (uint8_t k = 0; k < vo->cfg.n_cams; ++k) {
+        const uint8_t cam = vo->cfg.cams[k];
+        const rp_real d = (rp_real)fs->cam_dt_us[cam] * RP_C(1e-6) + vo->ekf.toff[cam];
+        if (!any_near || rp_fabs(d) <= RP_VO_START_SKEW_S) {
             /* ignored: the count is not needed here */
             (void)top_up_camera(vo, fs, cam, &pl, NULL);
         }

@@ -151,7 +151,7 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
     const rp_real da = (rp_real)fs->cam_dt_us[sp->a] * RP_C(1e-6) + vo->ekf.toff[sp->a];
     const rp_real db = (rp_real)fs->cam_dt_us[sp->b] * RP_C(1e-6) + vo->ekf.toff[sp->b];
     if (!(rp_fabs(da - db) <= cfg->max_pair_skew_s) ||
-        (vo->frame < 2 && !(rp_fabs(da) <= RP_VO_START_SKEW_S))) {
+        (vo->frame < 2 && vo->start_near && !(rp_fabs(da) <= RP_VO_START_SKEW_S))) {
         vo->skewed = 1;
         return 0;
     }
@@ -262,6 +262,15 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
     /* Step (1) at frame 0: the world is cam1's frame now, so the pose is exactly zero. */
     static const rp_real zero[6] = {0};
     vo->skewed = 0;
+    /* a pair not at the state's time waits for the filter's rate (triangulate_pair), unless
+     * none is: then all start here, each as if at the state's time */
+    vo->start_near = 0;
+    for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+        const uint8_t a = vo->pair[k].a;
+        const rp_real da = (rp_real)fs->cam_dt_us[a] * RP_C(1e-6) + vo->ekf.toff[a];
+        vo->start_near = (uint8_t)(vo->start_near | (fs->n[a] > 0 &&
+                                                     rp_fabs(da) <= RP_VO_START_SKEW_S));
+    }
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     uint16_t added = 0;
