@@ -77,6 +77,15 @@ static rp_stats_t g_stats;
 /* The features' channel: the image channel's name + "_FEATURES" (lcm_types/rigpose_features_t). */
 static char g_feat_channel[RP_CFG_CHANNEL_MAX + 16];
 
+/* The estimator's clock offsets into a status message (rp_pipe_time_offsets). */
+static void fill_offsets(rigpose_status_t *sm)
+{
+    rp_real off[RP_MAX_CAMS], sig[RP_MAX_CAMS];
+    if (rp_pipe_time_offsets(&g_est.pipe, off, sig) == RP_OK) {
+        rp_stats_fill_offsets(sm, off, sig, g_cfg.rig.n_cams);
+    }
+}
+
 /* A token bucket: credit_us of waiting earned, at most SAY_BURST lines' worth. */
 typedef struct {
     int64_t credit_us, t_us;
@@ -483,6 +492,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
             rp_stats_grab_failed(&g_stats, &g_set);
             rigpose_status_t sm;
             rp_stats_fill_status(&g_stats, &sm, &g_set, hst, NULL, &est, 0.0f, 0.0f, t_grab);
+            fill_offsets(&sm);
             publish_status(lcm, &sm);
             continue;
         }
@@ -543,6 +553,7 @@ static int run(const rp_args_t *o, rp_hal_source_t *src, lcm_t *lcm)
         if (r.changed || (uint32_t)seq % g_cfg.status_every == 0) {
             rigpose_status_t sm;
             rp_stats_fill_status(&g_stats, &sm, &g_set, hst, fs, &est, lat_ms, proc_ms, t_pub);
+            fill_offsets(&sm);
             publish_status(lcm, &sm);
         }
         if (!o->quiet && (uint32_t)seq % o->print_every == 0) {

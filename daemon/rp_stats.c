@@ -158,6 +158,19 @@ void rp_stats_fill_status(rp_stats_t *s, rigpose_status_t *m, const rp_hal_set_t
     s->lat_max_ms = 0.0f;
 }
 
+void rp_stats_fill_offsets(rigpose_status_t *m, const rp_real off_s[RP_MAX_CAMS],
+                           const rp_real sigma_s[RP_MAX_CAMS], uint8_t n_cams)
+{
+    if (m == NULL || off_s == NULL || sigma_s == NULL) {
+        return;
+    }
+    for (uint8_t k = 0; k < 6; ++k) {
+        const int in = k < n_cams && k < RP_MAX_CAMS;
+        m->cam_offset_ms[k] = in ? (float)(1e3 * (double)off_s[k]) : 0.0f;
+        m->cam_offset_sigma_ms[k] = in ? (float)(1e3 * (double)sigma_s[k]) : 0.0f;
+    }
+}
+
 /* The p-quantile of the histogram: the centre of the bin holding the latency of rank
  * floor(p (n - 1)) (0-based) in the sorted run. */
 static double lat_quantile(const rp_stats_t *s, double p)

@@ -88,6 +88,11 @@ void rp_stats_fill_status(rp_stats_t *s, rigpose_status_t *m, const rp_hal_set_t
                           rp_hal_status_t hal_st, const rp_frameset_t *fs,
                           const rp_estimate_t *est, float lat_ms, float proc_ms, int64_t now_us);
 
+/* The cameras' clock offsets into m (cam_offset_ms, cam_offset_sigma_ms) from the estimator's
+ * (rp_pipe_time_offsets: s), n_cams of them; the rest zero. */
+void rp_stats_fill_offsets(rigpose_status_t *m, const rp_real off_s[RP_MAX_CAMS],
+                           const rp_real sigma_s[RP_MAX_CAMS], uint8_t n_cams);
+
 /* The run's figures (sorts the latency record in place). */
 void rp_stats_summary(rp_stats_t *s, rp_stats_summary_t *out);
 

@@ -112,6 +112,17 @@ static void test_status_reports_the_period_then_starts_a_new_one(void **state)
     assert_int_equal(m.features[0], 0); /* no front end features given */
     assert_int_equal(m.frames[0], 31);
     assert_int_equal(m.n_lost, 1);
+
+    /* the clock offsets, s -> ms, n_cams of them */
+    rp_real off[RP_MAX_CAMS] = {0, RP_C(0.012), RP_C(-0.025)};
+    rp_real sig[RP_MAX_CAMS] = {0, RP_C(0.0005), RP_C(0.001)};
+    off[3] = RP_C(0.04);
+    rp_stats_fill_offsets(&m, off, sig, 3);
+    assert_near(m.cam_offset_ms[1], 12.0, 1e-4);
+    assert_near(m.cam_offset_ms[2], -25.0, 1e-4);
+    assert_near(m.cam_offset_sigma_ms[1], 0.5, 1e-4);
+    assert_true(m.cam_offset_ms[3] == 0.0f); /* past n_cams */
+    rp_stats_fill_offsets(NULL, off, sig, 3);  /* no effect, no crash */
 }
 
 static void test_truth_error_and_summary(void **state)
