@@ -580,19 +580,25 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     }
     vo->skewed = 0;
     uint32_t flags = 0;
+    /* The pairs whose first camera delivered an image: a pair without one (a slower camera
+     * between its frames: RP_FS_NO_IMAGE) keeps its landmarks for its next image. */
+    uint32_t imaged = 0;
+    for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+        imaged |= (fs->cam_flags[vo->pair[k].a] & RP_FS_NO_IMAGE) ? 0u : (1u << k);
+    }
 
     /* Which landmarks are still tracked; lost ones are dropped. */
     uint32_t n = gather_obs(vo, fs);
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, NULL, n);
     /* ignored: only NULL arguments fail */
-    (void)rp_lmtab_drop_unmarked(&vo->lm, RP_IDMAP_ALL_GROUPS, NULL);
+    (void)rp_lmtab_drop_unmarked(&vo->lm, imaged, NULL);
 
     /* Step (5): a pair under its threshold is re-initialised from the previous frame set at
      * the previous pose (backtracking one frame), with matches still tracked now. */
     int reinit = 0;
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-        if (vo->lm.map.n_group[k] < vo->cfg.min_tracked) {
+        if (vo->lm.map.n_group[k] < vo->cfg.min_tracked && (imaged & (1u << k))) {
             /* ignored: the count is not needed here */
             (void)triangulate_pair(vo, k, &vo->prev, vo->prev_p, fs);
             reinit = 1;
@@ -651,7 +657,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
             flags |= RP_EST_GATED;
         }
         /* ignored: only NULL arguments fail */
-        (void)rp_lmtab_drop_unmarked(&vo->lm, n_gated > 0 ? RP_IDMAP_ALL_GROUPS : 0u, NULL);
+        (void)rp_lmtab_drop_unmarked(&vo->lm, n_gated > 0 ? imaged : 0u, NULL);
     } else {
         flags |= RP_EST_LOST;
     }
