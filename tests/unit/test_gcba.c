@@ -95,6 +95,101 @@ static void test_noise_free_window_finds_the_map_unit(void **state)
     simfx_free(fx);
 }
 
+/* The smooth motion with camera k captured cam_off[k] after the keyframe's time (rp_sim.h's
+ * clocks): the window given each camera's time and the motion's rate there finds the unit
+ * and the truth's poses as the synchronised window does; given no times it does not. The
+ * camera's pose at its time is the rate's extrapolation, exact to first order: the motion's
+ * acceleration leaves |delta|^2 a / 2 (at 40 ms, mm and mrad), so the offsets here are 10 ms
+ * at most. */
+static double timed_window_mu(int give_times, double *pose_err)
+{
+    simfx_t *sim = calloc(1, sizeof(*sim));
+    rp_gcba_t *ba = calloc(1, sizeof(*ba));
+    static rp_gcba_obs_t obs[RP_GCBA_MAX_OBS_KF];
+    assert_non_null(sim);
+    assert_non_null(ba);
+    rp_sim_cfg_t cfg;
+    rp_sim_default_cfg(&cfg);
+    cfg.noise_px = 0.0;
+    cfg.n_frames = 40;
+    cfg.motion = RP_SIM_MOTION_SMOOTH;
+    static const double cam_off[RP_SIM_NCAMS] = {0.0, 0.006, -0.008, 0.010, 0.0, 0.0};
+    memcpy(cfg.cam_offset_s, cam_off, sizeof(cam_off));
+    assert_int_equal(rp_sim_run_init(&sim->sr, &cfg, 11, 0), 0);
+    const double mu = 1.15, h = 1e-4;
+    assert_ok(rp_gcba_reset(ba, 6));
+    for (uint8_t k = 0; k < 6; ++k) {
+        const uint32_t j = 4u * k;
+        rp_sim_frame(&sim->sr, j, &sim->fs);
+        uint16_t m = 0;
+        for (int c = 0; c < 4; ++c) {
+            for (uint16_t f = 0; f < sim->fs.n[cams[c]] && f < 60; ++f) {
+                const rp_feat_t *ft = &sim->fs.f[cams[c]][f];
+                obs[m].id = ft->id;
+                obs[m].cam = cams[c];
+                obs[m].uv[0] = (float)ft->uv[0];
+                obs[m].uv[1] = (float)ft->uv[1];
+                m++;
+            }
+        }
+        /* the truth at the keyframe's time and its rate (central differences), in map units */
+        const double t = (double)j * cfg.frame_dt;
+        double d0[3], d1[3], d2[3], R0[9], R1[9], R2[9];
+        assert_int_equal(rp_sim_pose(&sim->sr, t, d0, R0), 0);
+        assert_int_equal(rp_sim_pose(&sim->sr, t - h, d1, R1), 0);
+        assert_int_equal(rp_sim_pose(&sim->sr, t + h, d2, R2), 0);
+        rp_real p[6], rate[6], Rr[9], Ra[9], Rb[9], dR[9], w[3], cam_dt[RP_MAX_CAMS] = {0};
+        for (int a = 0; a < 9; ++a) {
+            Rr[a] = (rp_real)R0[a];
+            Ra[a] = (rp_real)R2[a];
+            Rb[a] = (rp_real)R1[a];
+        }
+        assert_ok(rp_rot_to_angles(Rr, p + 3));
+        rp_rot_mul_a_bt(Ra, Rb, dR);
+        rp_rot_log(dR, w);
+        for (int a = 0; a < 3; ++a) {
+            p[a] = (rp_real)(d0[a] * mu);
+            rate[a] = (rp_real)((d2[a] - d1[a]) / (2.0 * h) * mu);
+            rate[3 + a] = (rp_real)((double)w[a] / (2.0 * h));
+        }
+        for (int c = 0; c < RP_SIM_NCAMS; ++c) {
+            cam_dt[c] = (rp_real)cam_off[c];
+        }
+        assert_ok(rp_gcba_add_keyframe(ba, p, obs, m, give_times ? rate : NULL,
+                                       give_times ? cam_dt : NULL));
+    }
+    rp_gcba_cfg_t bc = rp_gcba_default_cfg();
+    bc.sigma_px = (rp_real)0.05;
+    bc.huber_px = (rp_real)0.2;
+    rp_gcba_result_t r;
+    assert_ok(rp_gcba_scale(ba, &sim->sr.rig, (rp_real)1.0, &bc, &r));
+    rp_real p5[6];
+    assert_ok(rp_gcba_solved_pose(ba, 5, p5));
+    *pose_err = 0.0;
+    for (int a = 0; a < 3; ++a) {
+        const double e = fabs((double)p5[a] - sim->sr.truth[6 * 20 + a]);
+        *pose_err = e > *pose_err ? e : *pose_err;
+    }
+    print_message("gcba, cameras 0, +6, -8, +10 ms, %s: mu %.5f (true 1.15), rms %.3f px, "
+                  "last keyframe %.2e m\n", give_times ? "their times given" : "taken as "
+                  "simultaneous", (double)r.mu, (double)r.rms_px, *pose_err);
+    rp_sim_run_free(&sim->sr);
+    free(sim);
+    free(ba);
+    return (double)r.mu;
+}
+
+static void test_window_with_cameras_at_their_own_times(void **state)
+{
+    (void)state;
+    double e_timed, e_flat;
+    const double mu_timed = timed_window_mu(1, &e_timed);
+    const double mu_flat = timed_window_mu(0, &e_flat);
+    assert_near(mu_timed, 1.15, RP_TOL(2e-3, 1e-2));
+    assert_true(e_timed < RP_TOL(2e-4, 1e-3));
+    assert_true(fabs(mu_flat - 1.15) > 5.0 * fabs(mu_timed - 1.15) || e_flat > 5.0 * e_timed);
+}
+
 static void test_noisy_window_from_wrong_angles(void **state)
 {
     (void)state;
@@ -327,6 +422,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_noise_free_window_finds_the_map_unit),
+        cmocka_unit_test(test_window_with_cameras_at_their_own_times),
         cmocka_unit_test(test_noisy_window_from_wrong_angles),
         cmocka_unit_test(test_outliers_are_held_by_the_huber_weight),
         cmocka_unit_test(test_without_rotation_the_scale_is_not_claimed),

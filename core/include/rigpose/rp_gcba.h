@@ -117,7 +117,8 @@ typedef struct {
     uint8_t head;                    /* index of the oldest */
     /* scratch of rp_gcba_scale */
     double x[RP_GCBA_MAX_KF][6];     /* keyframe poses in metres */
-    double mu;                       /* the map's unit of the adjustment under way (m) */
+    double mu;                       /* the map's unit the adjustment started from */
+    double mu_now;                   /* the unit its estimate implies now (prepare_poses) */
     rp_pose_lin_t pl[RP_GCBA_MAX_KF][RP_MAX_CAMS]; /* each camera's pose at its capture time
                                       * (rp_gcba_kf_t), prepared for projection */
     uint8_t pl_ok[RP_GCBA_MAX_KF][RP_MAX_CAMS];

@@ -275,20 +275,43 @@ static int linearise(const rp_gcba_t *ba, const rp_rig_t *rig, int j, const doub
 
 /* Build the reduced normal equations S dx = g at the current estimate; returns the robust cost
  * and fills the landmarks' Vi, v; *n_obs the observations used. */
+/* The map's unit the window's poses imply now: the least-squares ratio of the keyframes'
+ * translations from the oldest, as given (map units) over the estimate's (m); the start's unit
+ * if they do not move. *den: the estimate's sum of squares. */
+static double implied_mu(const rp_gcba_t *ba, int nk, double *den_out)
+{
+    double num = 0.0, den = 0.0;
+    for (int k = 1; k < nk; ++k) {
+        const rp_gcba_kf_t *kf = kf_at(ba, k), *k0 = kf_at(ba, 0);
+        for (int a = 0; a < 3; ++a) {
+            const double dt = ba->x[k][a] - ba->x[0][a];
+            num += ((double)kf->p[a] - (double)k0->p[a]) * dt;
+            den += dt * dt;
+        }
+    }
+    if (den_out) {
+        *den_out = den;
+    }
+    return den > 1e-12 && num > 0.0 ? num / den : ba->mu;
+}
+
 static rp_status_t cam_pose(const rp_gcba_t *ba, int k, uint8_t cam, rp_pose_lin_t *pl)
 {
     const rp_gcba_kf_t *kf = kf_at(ba, k);
     rp_real p[6], xi[6];
     pose_real(ba->x[k], p);
     for (int i = 0; i < 6; ++i) {
-        xi[i] = i < 3 ? (rp_real)((double)kf->rate[i] / ba->mu) : kf->rate[i];
+        xi[i] = i < 3 ? (rp_real)((double)kf->rate[i] / ba->mu_now) : kf->rate[i];
     }
     return rp_pose_lin_at(pl, p, xi, kf->cam_dt[cam]);
 }
 
-/* Each keyframe's cameras' poses prepared for projection (once per pass). */
+/* Each keyframe's cameras' poses prepared for projection (once per pass): a camera's time
+ * offset moves it by its rate, whose translation is in map units, so at the unit the
+ * estimate implies now (the rate scales with the solution, as the keyframes' translations). */
 static void prepare_poses(rp_gcba_t *ba, int nk)
 {
+    ba->mu_now = implied_mu(ba, nk, NULL);
     for (int k = 0; k < nk; ++k) {
         for (uint8_t c = 0; c < RP_MAX_CAMS; ++c) {
             ba->pl_ok[k][c] = (uint8_t)(cam_pose(ba, k, c, &ba->pl[k][c]) == RP_OK);
@@ -446,6 +469,7 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     ba->rig = rig;
     ba->cfg = *cfg;
     ba->mu = (double)mu;
+    ba->mu_now = (double)mu;
     ba->it = 0;
     memset(&ba->res, 0, sizeof(ba->res));
     const int nk = ba->n_kf;
@@ -591,19 +615,11 @@ rp_status_t rp_gcba_finish(rp_gcba_t *ba, rp_gcba_result_t *res)
     *res = ba->res;
 
     /* the map's unit the solution implies, and its variance through the normal matrix */
-    double num = 0.0, den = 0.0;
-    for (int k = 1; k < nk; ++k) {
-        const rp_gcba_kf_t *kf = kf_at(ba, k), *k0 = kf_at(ba, 0);
-        for (int a = 0; a < 3; ++a) {
-            const double dt = ba->x[k][a] - ba->x[0][a];
-            num += ((double)kf->p[a] - (double)k0->p[a]) * dt;
-            den += dt * dt;
-        }
-    }
+    double den = 0.0;
+    const double m = implied_mu(ba, nk, &den);
     if (!(den > 1e-12)) {
         return RP_E_DEGENERATE;
     }
-    const double m = num / den;
     if (rp_la_chol_d(ba->S, np) != RP_OK) {
         return RP_E_SINGULAR;
     }
