@@ -16,6 +16,23 @@ $(VIEW_BIN): host_tools/view/view.mk $(BUILD)/lcmgen/stamp
 	chmod +x $@
 
 EXTRA_TOOLS += $(VIEW_BIN)
+
+# rigpose-offsets: the cameras' clock offsets of a status message, written back into a
+# configuration file (host_tools/view/rigpose_offsets.py, docs/time.md); its test.
+OFFSETS_BIN := $(REL)/rigpose-offsets
+$(OFFSETS_BIN): host_tools/view/view.mk $(BUILD)/lcmgen/stamp
+	@mkdir -p $(@D)
+	printf '#!/bin/sh\n# rigpose-offsets of %s (host_tools/view/rigpose_offsets.py)\nPYTHONPATH="%s$${PYTHONPATH:+:$$PYTHONPATH}" exec "%s" "%s" "$$@"\n' \
+	    "$(CURDIR)" "$(abspath $(BUILD)/lcmgen/python)" "$(PY)" "$(CURDIR)/host_tools/view/rigpose_offsets.py" > $@
+	chmod +x $@
+EXTRA_TOOLS += $(OFFSETS_BIN)
+
+$(BUILD)/view/run_test_offsets: host_tools/view/test_offsets.sh
+	@mkdir -p $(@D)
+	printf '#!/bin/sh\nexec %s/host_tools/view/test_offsets.sh %s "$$@"\n' "$(CURDIR)" "$(BUILD)" > $@
+	chmod +x $@
+HOST_EXTRA_TESTS += $(BUILD)/view/run_test_offsets
+test: $(BUILD)/view/run_test_offsets $(OFFSETS_BIN) $(REL)/rigpose
 HOST_EXTRA_TESTS += host_tools/view/test_view.sh
 SERIAL_TESTS += host_tools/view/test_view.sh
 test: $(VIEW_BIN) $(REL)/rigpose $(REL)/rigpose-log $(REL)/rigpose-render
