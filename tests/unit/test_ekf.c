@@ -484,6 +484,59 @@ static void test_clock_offsets_are_estimated(void **state)
     free_fixture(fx);
 }
 
+/* The rate from a filter started at rest (velocity prior 1 m/s, 1 rad/s): cameras 2 or 20 ms
+ * off the set's time, their offsets given, must not make it worse than synchronised cameras
+ * give it (the rate is a considered parameter of the camera-time pose: rp_ekf.c). Largest
+ * velocity error over frames 10..30, 0.5 px noise. */
+static double rate_error(const rp_sim_run_t *sr, double off1, rp_obs_t *obs, uint32_t cap)
+{
+    const double none[RP_SIM_NCAMS] = {0};
+    double truth[RP_SIM_NCAMS] = {0};
+    truth[1] = off1;
+    rp_real x0[N] = {0}, P0[N];
+    for (int i = 0; i < 6; ++i) {
+        P0[i] = RP_C(1e-6);
+        P0[6 + i] = RP_C(1.0);
+    }
+    rp_ekf_t *ekf = make_ekf(x0, RP_C(0.001), RP_C(1.0));
+    assert_ok(rp_ekf_init(ekf, &ekf->prm, x0, P0));
+    rp_real off[RP_MAX_CAMS] = {0};
+    off[1] = (rp_real)off1;
+    assert_ok(rp_ekf_toff_set(ekf, 0, off, NULL, RP_C(0.0)));
+    rp_rng_t rng;
+    rp_rng_seed(&rng, 5);
+    double worst = 0.0;
+    for (int j = 1; j <= 30; ++j) {
+        assert_ok(rp_ekf_predict(ekf, RP_C(1.0 / 30.0)));
+        const uint32_t n = cv_obs(sr, j / 30.0, truth, none, 0.5, &rng, obs, cap);
+        assert_ok(rp_ekf_update(ekf, &sr->rig, obs, n, NULL, NULL));
+        double e = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            e += pow((double)ekf->x[6 + i] - (double)cv_V[i], 2) +
+                 pow((double)ekf->x[9 + i] - (double)cv_W[i], 2);
+        }
+        if (j >= 10 && sqrt(e) > worst) {
+            worst = sqrt(e);
+        }
+    }
+    free(ekf);
+    return worst;
+}
+
+static void test_camera_times_leave_the_rate_alone(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0, 2);
+    const double e0 = rate_error(&fx->sr, 0.0, fx->obs, 2000);
+    const double e2 = rate_error(&fx->sr, 0.002, fx->obs, 2000);
+    const double e20 = rate_error(&fx->sr, 0.020, fx->obs, 2000);
+    print_message("rate error from rest, frames 10-30: synchronised %.4f, a camera at +2 ms "
+                  "%.4f, at +20 ms %.4f\n", e0, e2, e20);
+    assert_true(e2 < 2.0 * e0);
+    assert_true(e20 < 2.0 * e0);
+    free_fixture(fx);
+}
+
 static void test_toff_set_rejects_bad_input(void **state)
 {
     (void)state;
@@ -530,6 +583,7 @@ int main(void)
         cmocka_unit_test(test_broken_covariance_is_reset_and_filter_recovers),
         cmocka_unit_test(test_features_apply_at_their_cameras_times),
         cmocka_unit_test(test_clock_offsets_are_estimated),
+        cmocka_unit_test(test_camera_times_leave_the_rate_alone),
         cmocka_unit_test(test_toff_set_rejects_bad_input),
     };
     return cmocka_run_group_tests_name("ekf", tests, NULL, NULL);

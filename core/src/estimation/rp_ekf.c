@@ -288,8 +288,10 @@ static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
     return RP_OK;
 }
 
-/* r^T S^-1 r with S = H C H^T + s2 I: H 2xD, C DxD, both row-major. */
-static rp_real maha_d(const rp_real *H, const rp_real *C, int D, rp_real s2, const rp_real r[2])
+/* r^T S^-1 r with S = H C H^T + s2 I (+ Rx: [xx xy yy], may be NULL): H 2xD, C DxD, both
+ * row-major. */
+static rp_real maha_d(const rp_real *H, const rp_real *C, int D, rp_real s2, const rp_real *Rx,
+                      const rp_real r[2])
 {
     rp_real HC[2 * DMAX];
     for (int a = 0; a < 2; ++a) {
@@ -311,6 +313,12 @@ static rp_real maha_d(const rp_real *H, const rp_real *C, int D, rp_real s2, con
             S[a * 2 + b] = acc + (a == b ? s2 : RP_C(0.0));
         }
     }
+    if (Rx) {
+        S[0] += Rx[0];
+        S[1] += Rx[1];
+        S[2] += Rx[1];
+        S[3] += Rx[2];
+    }
     rp_real det = S[0] * S[3] - S[1] * S[2];
     if (!(det > RP_C(0.0))) {
         return RP_C(1e30); /* S not positive definite: farther than any gate */
@@ -321,7 +329,7 @@ static rp_real maha_d(const rp_real *H, const rp_real *C, int D, rp_real s2, con
 rp_real rp_ekf_mahalanobis2(const rp_real J[12], const rp_real C[36], rp_real s2,
                             const rp_real r[2])
 {
-    return maha_d(J, C, NP, s2, r);
+    return maha_d(J, C, NP, s2, NULL, r);
 }
 
 /* Posterior covariance Cpost = L S^-1 L^T with S = I + L^T A L (all DxD). */
@@ -448,9 +456,15 @@ static rp_status_t yblock_iterate(const yblock_t *y, const rp_ekf_t *e0, const r
 
 /* One observation at the iterate: its predicted pixel and its Jacobian H (2xD) on y.
  * D = 6: H = J_pose at p. Timed: the pose at the camera's time, pc = p [+] delta xi with
- * delta = obs.dt + toff[cam], H = [J, delta J, J xi at the camera's offset] (the chart's
+ * delta = obs.dt + toff[cam], H = [J, 0, J xi at the camera's offset] (the chart's
  * composition Exp(delta omega) Exp(w) ~ Exp(delta omega + w) taken to first order, as the
- * predict's). plc caches the camera-time pose of the last camera and delta seen. */
+ * predict's). The rate is a considered parameter of the camera-time pose, not solved for from
+ * it: its prior uncertainty enters the pixel's noise, Rx = delta^2 J Pvv J^T ([xx xy yy]), and
+ * the rate follows the pose through their prior correlation, as in a synchronised set. Why:
+ * the rate's own information from delta J is the pixel noise over delta (at 2 ms, 800 px,
+ * 0.5 px: 0.3 rad/s per feature), which a loose process noise lets through and which then
+ * corrupts every prediction (rigpose-sim, gc with one camera at +2 ms given: 0.0038 m with it,
+ * docs/time.md). plc caches the camera-time pose of the last camera and delta seen. */
 typedef struct {
     uint8_t cam;
     rp_real delta;
@@ -460,9 +474,10 @@ typedef struct {
 
 static rp_status_t obs_predict(const yblock_t *y, const rp_rig_t *rig, const rp_obs_t *o,
                                const rp_pose_lin_t *pl, const rp_real xi[NP],
-                               const rp_real toff[NO], camcache_t *cc, rp_real uv[2],
-                               rp_real *H)
+                               const rp_real toff[NO], const rp_real *P0, camcache_t *cc,
+                               rp_real uv[2], rp_real *H, rp_real Rx[3])
 {
+    Rx[0] = Rx[1] = Rx[2] = RP_C(0.0);
     const int D = y->D;
     if (D == NP) {
         return rp_rig_project(rig, o->cam, pl, o->M, uv, H, NULL);
@@ -483,11 +498,29 @@ static rp_status_t obs_predict(const yblock_t *y, const rp_rig_t *rig, const rp_
         return st;
     }
     const int oi = y->off_of[o->cam];
+    rp_real JP[12]; /* J Pvv */
+    for (int a = 0; a < 2; ++a) {
+        for (int j = 0; j < NP; ++j) {
+            rp_real acc = RP_C(0.0);
+            for (int k = 0; k < NP; ++k) {
+                acc += J[a * NP + k] * P0[(NP + k) * N + NP + j];
+            }
+            JP[a * NP + j] = acc;
+        }
+    }
+    for (int i = 0; i < NP; ++i) {
+        Rx[0] += JP[i] * J[i];
+        Rx[1] += JP[i] * J[NP + i];
+        Rx[2] += JP[NP + i] * J[NP + i];
+    }
+    for (int e = 0; e < 3; ++e) {
+        Rx[e] *= delta * delta;
+    }
     for (int a = 0; a < 2; ++a) {
         rp_real *h = H + a * D, jx = RP_C(0.0);
         for (int i = 0; i < NP; ++i) {
             h[i] = J[a * NP + i];
-            h[NP + i] = delta * J[a * NP + i];
+            h[NP + i] = RP_C(0.0);
             jx += J[a * NP + i] * xi[i];
         }
         for (int i = N; i < D; ++i) {
@@ -610,10 +643,10 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
             sq_sum = RP_C(0.0);
             for (uint32_t k = 0; k < n; ++k) {
                 const rp_obs_t *o = &obs[k];
-                rp_real uv[2], H[2 * DMAX];
+                rp_real uv[2], H[2 * DMAX], Rx[3];
                 if (!rp_finite(o->w) || o->w <= RP_C(0.0) || !rp_all_finite(o->uv, 2) ||
                     !rp_finite(o->dt) || o->cam >= rig->n_cams ||
-                    obs_predict(&y, rig, o, &pl, xi, toff, &cc, uv, H) != RP_OK) {
+                    obs_predict(&y, rig, o, &pl, xi, toff, P0, &cc, uv, H, Rx) != RP_OK) {
                     n_bad++;
                     if (used) {
                         used[k] = 0;
@@ -623,7 +656,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
                 rp_real r[2] = {o->uv[0] - uv[0], o->uv[1] - uv[1]};
                 if (gate) {
                     /* innovation of this feature against the current estimate */
-                    rp_real d2 = maha_d(H, Cpost, D, s2 / o->w, r);
+                    rp_real d2 = maha_d(H, Cpost, D, s2 / o->w, D == NP ? NULL : Rx, r);
                     if (d2 > prm->gate_chi2) {
                         n_gated++;
                         if (used) {
@@ -646,11 +679,26 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
                     }
                     rr[a] = r[a] + jd; /* r + H (y_k - y0) */
                 }
-                for (int i = 0; i < D; ++i) {
-                    const rp_real j0 = H[i] * wk, j1 = H[D + i] * wk;
-                    b[i] += j0 * rr[0] + j1 * rr[1];
-                    for (int j = 0; j <= i; ++j) {
-                        A[i * D + j] += j0 * H[j] + j1 * H[D + j];
+                if (D == NP) {
+                    for (int i = 0; i < D; ++i) {
+                        const rp_real j0 = H[i] * wk, j1 = H[D + i] * wk;
+                        b[i] += j0 * rr[0] + j1 * rr[1];
+                        for (int j = 0; j <= i; ++j) {
+                            A[i * D + j] += j0 * H[j] + j1 * H[D + j];
+                        }
+                    }
+                } else {
+                    /* the pixel's noise s2 / w I + Rx, inverted: W (2x2 symmetric) */
+                    const rp_real n0 = s2 / o->w + Rx[0], n1 = Rx[1], n2 = s2 / o->w + Rx[2];
+                    const rp_real det = n0 * n2 - n1 * n1;
+                    const rp_real W0 = n2 / det, W1 = -n1 / det, W2 = n0 / det;
+                    for (int i = 0; i < D; ++i) {
+                        const rp_real j0 = H[i] * W0 + H[D + i] * W1;
+                        const rp_real j1 = H[i] * W1 + H[D + i] * W2;
+                        b[i] += j0 * rr[0] + j1 * rr[1];
+                        for (int j = 0; j <= i; ++j) {
+                            A[i * D + j] += j0 * H[j] + j1 * H[D + j];
+                        }
                     }
                 }
             }
