@@ -11,8 +11,8 @@
  * cam2 = cam3 (back), cam3 = cam4 (left), cam4 = cam1's stereo partner, cam5 = cam3's.
  * The motion is run `--run` of rigpose-sim's experiment `--seed` (the paper's Table 1 motion,
  * or with --motion turn / pitch / smooth rigpose-sim's); --cam-offsets-ms / --jitter-ms render
- * each camera at its own (unknown) capture time, stamped with the set's; --moving-object adds an independently
- * moving textured sphere in front of one camera (rp_render.hpp, MovingObject).
+ * each camera at its own (unknown) capture time, stamped with the set's; --moving-object adds
+ * an independently moving textured sphere in front of one camera (rp_render.hpp, MovingObject).
  */
 #include <sys/stat.h>
 

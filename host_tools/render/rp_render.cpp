@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "rigpose/rp_camera.h"
+#include "rigpose/rp_rot.h"
 #include "rp_noise.hpp"
 #include "rp_sim.h"
 
@@ -704,6 +705,24 @@ void surface_features(const Sequence &seq, const std::vector<double> &pts, int n
     }
     for (int k = 0; k < n_cams && k < rig.n_cams; ++k) {
         const rp_camera_t &cam = rig.cam[k].cam;
+        if (seq.clocked()) {
+            /* the camera's own capture time (cam_pose), its angles as rp_sim's truth has them */
+            const Pose cp = seq.cam_pose(j, k);
+            rp_real Rr[9], abg[3], tk[6];
+            for (int i = 0; i < 9; ++i) {
+                Rr[i] = (rp_real)cp.R[i];
+            }
+            if (rp_rot_to_angles(Rr, abg) != RP_OK) {
+                continue;
+            }
+            for (int i = 0; i < 3; ++i) {
+                tk[i] = (rp_real)cp.d[i];
+                tk[3 + i] = abg[i];
+            }
+            if (rp_pose_lin_set(&pl, tk) != RP_OK) {
+                continue;
+            }
+        }
         std::mt19937_64 rng(key(noise_key, j, (uint64_t)k));
         std::normal_distribution<double> g(0.0, noise_px > 0.0 ? noise_px : 1.0);
         const double amp = noise_px > 0.0 ? 1.0 : 0.0;

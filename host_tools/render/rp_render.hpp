@@ -299,6 +299,8 @@ public:
      * pose at the set's time + the camera's offset + its jitter (rp_sim_cam_frame). Images,
      * world_point_at and the moving object's view use it. */
     Pose cam_pose(uint32_t j, int k) const;
+    /* true when camera clocks are set (cam_pose differs from pose) */
+    bool clocked() const { return !cam_d_.empty(); }
     int64_t utime(uint32_t j) const;
     /* 8-bit image of rig camera k at frame j, with the configured degradations. */
     void render(uint32_t j, int k, cv::Mat *out8) const;
@@ -328,7 +330,8 @@ private:
  * sphere (seeded by seed_key); world metres, 3 per point. */
 std::vector<double> surface_points(const Scene &scene, int n, uint64_t seed_key);
 
-/* Frame set of frame j of seq from points pts, as rp_sim_frame makes it: in each of the first
+/* Frame set of frame j of seq from points pts, as rp_sim_frame makes it (with clocks, each camera
+ * from its own cam_pose, stamped with the set's time): in each of the first
  * n_cams rig cameras every point at least 0.05 m in front that projects inside the image
  * (the first RP_MAX_FEATS_PER_CAM of them), id = point index, plus independent Gaussian noise
  * of noise_px per coordinate (seeded by noise_key, j and the camera). */

@@ -1317,7 +1317,7 @@ int main(int argc, char **argv)
         rp_sim_run_free(&probe);
         if (st != 0) {
             fprintf(stderr, "rigpose-sim: %s\n", st == -2 ? "these camera clocks cannot be "
-                    "simulated: rates 0..1000 Hz, each camera at the fastest one's rate or at "
+                    "simulated: rates 0 or 1..1000 Hz, each camera at the fastest one's rate or at "
                     "least 2 us a frame slower, phases 0..1000 ms, offsets within 1000 ms, jitter "
                     "up to 100 ms (rp_sim.h)" : "out of memory");
             return 2;

@@ -273,7 +273,8 @@ static int clocks_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg)
     }
     for (int k = 0; k < RP_SIM_NCAMS; ++k) {
         const double fps = cfg->cam_fps[k];
-        if (!(fps >= 0.0 && fps <= 1000.0) || !(cfg->cam_phase_s[k] >= 0.0) ||
+        /* 0, or 1..1000 Hz: cam_dt_us (> -1 frame) fits its int32_t */
+        if (!(fps == 0.0 || (fps >= 1.0 && fps <= 1000.0)) || !(cfg->cam_phase_s[k] >= 0.0) ||
             !(cfg->cam_phase_s[k] <= 1.0) || !(fabs(cfg->cam_offset_s[k]) <= 1.0)) {
             return -2;
         }

@@ -182,7 +182,7 @@ typedef struct {
 
 /* Make run `run` of the experiment seeded by `seed`: the point cloud and the trajectory.
  * Returns 0; -1 if memory ran out; -2 for clocks that cannot be simulated: any with the paper's
- * motion, a rate < 0 or > 1000 Hz, a phase outside 0..1 s, |offset| > 1 s, jitter outside
+ * motion, a rate other than 0 or 1..1000 Hz, a phase outside 0..1 s, |offset| > 1 s, jitter outside
  * 0..0.1 s, or a camera slower than the fastest by less than 2 us a frame (see above). */
 int rp_sim_run_init(rp_sim_run_t *sr, const rp_sim_cfg_t *cfg, uint64_t seed, uint32_t run);
 void rp_sim_run_free(rp_sim_run_t *sr);

@@ -292,6 +292,8 @@ static void impossible_clocks_are_refused(void **state)
     rp_sim_run_free(&sr);
     cfg.cam_fps[1] = -1.0;
     assert_int_equal(rp_sim_run_init(&sr, &cfg, 1, 0), -2);
+    cfg.cam_fps[1] = 0.5; /* a 2 s frame would not fit cam_dt_us */
+    assert_int_equal(rp_sim_run_init(&sr, &cfg, 1, 0), -2);
     cfg.cam_fps[1] = 0.0;
     cfg.jitter_s = -0.001;
     assert_int_equal(rp_sim_run_init(&sr, &cfg, 1, 0), -2);
