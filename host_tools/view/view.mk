@@ -8,12 +8,18 @@
 #                                   through `rigpose-log mcap`; a WebSocket client on the live
 #                                   server receives the poses; camera images of a rendered run
 
+# $(call py_tool,SCRIPT): the recipe of a wrapper that runs SCRIPT with the venv's Python and
+# the generated `rigpose` package.
+define py_tool
+	@mkdir -p $(@D)
+	printf '#!/bin/sh\n# %s of %s (%s)\nPYTHONPATH="%s$${PYTHONPATH:+:$$PYTHONPATH}" exec "%s" "%s" "$$@"\n' \
+	    "$(notdir $@)" "$(CURDIR)" "$(1)" "$(abspath $(BUILD)/lcmgen/python)" "$(PY)" "$(CURDIR)/$(1)" > $@
+	chmod +x $@
+endef
+
 VIEW_BIN := $(REL)/rigpose-view
 $(VIEW_BIN): host_tools/view/view.mk $(BUILD)/lcmgen/stamp
-	@mkdir -p $(@D)
-	printf '#!/bin/sh\n# rigpose-view of %s (host_tools/view/rigpose_view.py)\nPYTHONPATH="%s$${PYTHONPATH:+:$$PYTHONPATH}" exec "%s" "%s" "$$@"\n' \
-	    "$(CURDIR)" "$(abspath $(BUILD)/lcmgen/python)" "$(PY)" "$(CURDIR)/host_tools/view/rigpose_view.py" > $@
-	chmod +x $@
+	$(call py_tool,host_tools/view/rigpose_view.py)
 
 EXTRA_TOOLS += $(VIEW_BIN)
 
@@ -21,10 +27,7 @@ EXTRA_TOOLS += $(VIEW_BIN)
 # configuration file (host_tools/view/rigpose_offsets.py, docs/time.md); its test.
 OFFSETS_BIN := $(REL)/rigpose-offsets
 $(OFFSETS_BIN): host_tools/view/view.mk $(BUILD)/lcmgen/stamp
-	@mkdir -p $(@D)
-	printf '#!/bin/sh\n# rigpose-offsets of %s (host_tools/view/rigpose_offsets.py)\nPYTHONPATH="%s$${PYTHONPATH:+:$$PYTHONPATH}" exec "%s" "%s" "$$@"\n' \
-	    "$(CURDIR)" "$(abspath $(BUILD)/lcmgen/python)" "$(PY)" "$(CURDIR)/host_tools/view/rigpose_offsets.py" > $@
-	chmod +x $@
+	$(call py_tool,host_tools/view/rigpose_offsets.py)
 EXTRA_TOOLS += $(OFFSETS_BIN)
 
 $(BUILD)/view/run_test_offsets: host_tools/view/test_offsets.sh

@@ -196,6 +196,21 @@ rp_status_t rp_ekf_predict(rp_ekf_t *ekf, rp_real dt)
     return st;
 }
 
+/* Rows 3..5 (the rotation) of the row-major matrix M (cols columns) <- Phi times them. */
+static void rows_times_phi(rp_real *M, int cols, const rp_real Phi[9])
+{
+    for (int j = 0; j < cols; ++j) {
+        rp_real t[3];
+        for (int a = 0; a < 3; ++a) {
+            t[a] = Phi[3 * a] * M[3 * cols + j] + Phi[3 * a + 1] * M[4 * cols + j] +
+                   Phi[3 * a + 2] * M[5 * cols + j];
+        }
+        for (int a = 0; a < 3; ++a) {
+            M[(3 + a) * cols + j] = t[a];
+        }
+    }
+}
+
 /* The constant-velocity time update over dt > 0 (the plant of rp_ekf.h). */
 static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
 {
@@ -219,16 +234,7 @@ static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
      * F = F_cv G with G = diag(I, Phi, I, I) and F_cv = [I dt*I; 0 I]: first P <- G P G^T
      * (rows, then columns 3..5 times Phi), then F_cv below. */
     rp_rot_exp(wdt, Phi);
-    for (int j = 0; j < N; ++j) { /* rows 3..5 <- Phi rows 3..5 */
-        rp_real t[3];
-        for (int a = 0; a < 3; ++a) {
-            t[a] = Phi[3 * a] * P[3 * N + j] + Phi[3 * a + 1] * P[4 * N + j] +
-                   Phi[3 * a + 2] * P[5 * N + j];
-        }
-        for (int a = 0; a < 3; ++a) {
-            P[(3 + a) * N + j] = t[a];
-        }
-    }
+    rows_times_phi(P, N, Phi);
     for (int i = 0; i < N; ++i) { /* columns 3..5 <- columns 3..5 Phi^T */
         rp_real t[3];
         for (int a = 0; a < 3; ++a) {
@@ -257,15 +263,8 @@ static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
      * dt rows 6..11); the offset states walk: Poo += q_toff dt. */
     if (ekf->toff_mask) {
         rp_real *X = ekf->Pxo;
+        rows_times_phi(X, NO, Phi);
         for (int j = 0; j < NO; ++j) {
-            rp_real t[3];
-            for (int a = 0; a < 3; ++a) {
-                t[a] = Phi[3 * a] * X[3 * NO + j] + Phi[3 * a + 1] * X[4 * NO + j] +
-                       Phi[3 * a + 2] * X[5 * NO + j];
-            }
-            for (int a = 0; a < 3; ++a) {
-                X[(3 + a) * NO + j] = t[a];
-            }
             for (int i = 0; i < NP; ++i) {
                 X[i * NO + j] += dt * X[(NP + i) * NO + j];
             }
