@@ -90,6 +90,7 @@ typedef struct {
     int no_refine;           /* 1: keep the first triangulation (the paper's structure) */
     int est_offsets;         /* 1: the filters estimate the cameras' clock offsets */
     const double *known_off_s; /* --known-offsets: the true offsets configured, else NULL */
+    double model_jitter_s;     /* --model-jitter: the clocks' jitter as the filters' (s), or 0 */
 } method_opts_t;
 
 /* --estimate-offsets, --known-offsets on a layout's filter parameters. */
@@ -100,6 +101,9 @@ static void offsets_opt(const method_opts_t *o, rp_ekf_params_t *e)
     }
     for (int k = 0; o->known_off_s != NULL && k < RP_SIM_NCAMS; ++k) {
         e->toff0_s[k] = (rp_real)o->known_off_s[k];
+    }
+    if (o->model_jitter_s > 0.0) {
+        e->time_jitter_s = (rp_real)o->model_jitter_s;
     }
 }
 
@@ -303,6 +307,7 @@ typedef struct {
     int no_refine;
     int est_offsets;
     int known_offsets;
+    int model_jitter;
     int layout_study;         /* --layout-study given */
     const char *layout_file;  /* its FILE, or NULL for the built-in grid */
     int methods_given, runs_given, frames_given;
@@ -370,6 +375,7 @@ static void usage(FILE *out, const char *argv0)
             "                   (estimator.estimate_time_offsets; stereo and gc)\n"
             "  --known-offsets  the filters are given the true --cam-offsets-ms (their start\n"
             "                   value with --estimate-offsets): the ceiling of compensation\n"
+            "  --model-jitter   the filters' estimator.time_jitter_s is --jitter-ms\n"
             "  --layout-study [FILE]  rank placements of cam2/cam4 (FILE: one per line,\n"
             "                   'name x2 y2 z2 yaw2_deg x4 y4 z4 yaw4_deg', cam1's frame, m;\n"
             "                   no FILE: the built-in grid of 27 around the paper's) by the\n"
@@ -528,6 +534,10 @@ static int parse_args(int argc, char **argv, opts_t *o)
         }
         if (strcmp(arg, "--known-offsets") == 0) {
             o->known_offsets = 1;
+            continue;
+        }
+        if (strcmp(arg, "--model-jitter") == 0) {
+            o->model_jitter = 1;
             continue;
         }
         if (strcmp(arg, "--layout-study") == 0) {
@@ -728,7 +738,8 @@ static void *worker(void *arg)
     job_t *job = arg;
     const opts_t *o = job->o;
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
-                               o->known_offsets ? o->cam_offset_s : NULL};
+                               o->known_offsets ? o->cam_offset_s : NULL,
+                               o->model_jitter ? o->jitter_ms * 1e-3 : 0.0};
     void *state[MAX_METHODS] = {NULL};
     rp_frameset_t *fs = malloc(sizeof *fs);
     rp_rig_t rig;
@@ -1255,6 +1266,8 @@ static const char *const sim_why[][2] = {
     {"stereo.ekf.toff0_s", "--known-offsets"},
     {"gc.ekf.toff0_s", "--known-offsets"},
     {"mono.ekf.toff0_s", "--known-offsets"},
+    {"stereo.ekf.time_jitter_s", "--model-jitter: the clocks' --jitter-ms"},
+    {"gc.ekf.time_jitter_s", "--model-jitter: the clocks' --jitter-ms"},
     {"gc.init_on_sphere", "the scene surrounds the rig: depth along the ray"},
     {"gc.init_depth", "the simulated shell's mid radius (0.667 + 1) / 2 m, +- 0.15 m "
                       "(rp_sim_gc_cfg)"},
@@ -1267,7 +1280,8 @@ static const char *const sim_why[][2] = {
 static void print_deviations(const opts_t *o)
 {
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
-                               o->known_offsets ? o->cam_offset_s : NULL};
+                               o->known_offsets ? o->cam_offset_s : NULL,
+                               o->model_jitter ? o->jitter_ms * 1e-3 : 0.0};
     for (unsigned i = 0; i < o->n_methods; ++i) {
         const rp_pipe_layout_t l = o->m[i]->layout;
         rp_pipe_cfg_t cfg;

@@ -71,6 +71,9 @@ typedef struct {
     rp_real toff_sigma_s;  /* start sigma of an offset state, s (> 0) */
     rp_real toff_q;        /* random-walk density of an offset state, s^2/s (>= 0): the
                             * clocks' drift */
+    rp_real time_jitter_s; /* standard deviation of a capture time about its stamp (plus
+                            * offset), s (>= 0): each feature's pixel noise gains
+                            * jitter^2 (J xi)(J xi)^T, its image motion over that time */
 } rp_ekf_params_t;
 
 /* Defaults for 0.5 px noise and a hand-held / robot motion at ~30 Hz. */

@@ -45,6 +45,7 @@ rp_ekf_params_t rp_ekf_default_params(void)
     p.toff_estimate = 0;
     p.toff_sigma_s = RP_C(0.02);
     p.toff_q = RP_C(1e-8);
+    p.time_jitter_s = RP_C(0.0);
     return p;
 }
 
@@ -53,12 +54,13 @@ static rp_status_t check_params(const rp_ekf_params_t *prm)
     if (!rp_finite(prm->sigma_px) || !rp_finite(prm->q_trans) || !rp_finite(prm->q_rot) ||
         !rp_finite(prm->gate_chi2) || !rp_finite(prm->max_predict_s) ||
         !rp_all_finite(prm->toff0_s, NO) || !rp_finite(prm->toff_sigma_s) ||
-        !rp_finite(prm->toff_q)) {
+        !rp_finite(prm->toff_q) || !rp_finite(prm->time_jitter_s)) {
         return RP_E_NAN;
     }
     if (prm->sigma_px <= RP_C(0.0) || prm->q_trans < RP_C(0.0) || prm->q_rot < RP_C(0.0) ||
         prm->iterations == 0 || prm->min_features < 3 || !(prm->max_predict_s > RP_C(0.0)) ||
-        !(prm->toff_sigma_s > RP_C(0.0)) || prm->toff_q < RP_C(0.0)) {
+        !(prm->toff_sigma_s > RP_C(0.0)) || prm->toff_q < RP_C(0.0) ||
+        prm->time_jitter_s < RP_C(0.0)) {
         return RP_E_ARG;
     }
     return RP_OK;
@@ -400,7 +402,7 @@ typedef struct {
 
 static void yblock_set(yblock_t *y, const rp_ekf_t *ekf, const rp_obs_t *obs, uint32_t n)
 {
-    int timed = ekf->toff_mask != 0;
+    int timed = ekf->toff_mask != 0 || ekf->prm.time_jitter_s > RP_C(0.0);
     for (uint32_t k = 0; k < n && !timed; ++k) {
         timed = obs[k].cam < NO && obs[k].dt + ekf->toff[obs[k].cam] != RP_C(0.0);
     }
@@ -459,7 +461,8 @@ static rp_status_t yblock_iterate(const yblock_t *y, const rp_ekf_t *e0, const r
  * composition Exp(delta omega) Exp(w) ~ Exp(delta omega + w) taken to first order, as the
  * predict's). The rate is a considered parameter of the camera-time pose, not solved for from
  * it: its prior uncertainty enters the pixel's noise, Rx = delta^2 J Pvv J^T ([xx xy yy]), and
- * the rate follows the pose through their prior correlation, as in a synchronised set. Why:
+ * the rate follows the pose through their prior correlation, as in a synchronised set; the
+ * capture time's jitter adds jitter^2 (J xi)(J xi)^T. Why the rate is considered:
  * the rate's own information from delta J is the pixel noise over delta (at 2 ms, 800 px,
  * 0.5 px: 0.3 rad/s per feature), which a loose process noise lets through and which then
  * corrupts every prediction (rigpose-sim, gc with one camera at +2 ms given: 0.0038 m with it,
@@ -473,8 +476,8 @@ typedef struct {
 
 static rp_status_t obs_predict(const yblock_t *y, const rp_rig_t *rig, const rp_obs_t *o,
                                const rp_pose_lin_t *pl, const rp_real xi[NP],
-                               const rp_real toff[NO], const rp_real *P0, camcache_t *cc,
-                               rp_real uv[2], rp_real *H, rp_real Rx[3])
+                               const rp_real toff[NO], const rp_real *P0, rp_real jitter,
+                               camcache_t *cc, rp_real uv[2], rp_real *H, rp_real Rx[3])
 {
     Rx[0] = Rx[1] = Rx[2] = RP_C(0.0);
     const int D = y->D;
@@ -512,21 +515,27 @@ static rp_status_t obs_predict(const yblock_t *y, const rp_rig_t *rig, const rp_
         Rx[1] += JP[i] * J[NP + i];
         Rx[2] += JP[NP + i] * J[NP + i];
     }
-    for (int e = 0; e < 3; ++e) {
-        Rx[e] *= delta * delta;
-    }
+    rp_real Jx[2] = {RP_C(0.0), RP_C(0.0)}; /* J xi: the feature's image motion, px/s */
     for (int a = 0; a < 2; ++a) {
-        rp_real *h = H + a * D, jx = RP_C(0.0);
+        for (int i = 0; i < NP; ++i) {
+            Jx[a] += J[a * NP + i] * xi[i];
+        }
+    }
+    const rp_real j2 = jitter * jitter;
+    Rx[0] = delta * delta * Rx[0] + j2 * Jx[0] * Jx[0];
+    Rx[1] = delta * delta * Rx[1] + j2 * Jx[0] * Jx[1];
+    Rx[2] = delta * delta * Rx[2] + j2 * Jx[1] * Jx[1];
+    for (int a = 0; a < 2; ++a) {
+        rp_real *h = H + a * D;
         for (int i = 0; i < NP; ++i) {
             h[i] = J[a * NP + i];
             h[NP + i] = RP_C(0.0);
-            jx += J[a * NP + i] * xi[i];
         }
         for (int i = N; i < D; ++i) {
             h[i] = RP_C(0.0);
         }
         if (oi >= 0) {
-            h[oi] = jx;
+            h[oi] = Jx[a];
         }
     }
     return RP_OK;
@@ -645,7 +654,8 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
                 rp_real uv[2], H[2 * DMAX], Rx[3];
                 if (!rp_finite(o->w) || o->w <= RP_C(0.0) || !rp_all_finite(o->uv, 2) ||
                     !rp_finite(o->dt) || o->cam >= rig->n_cams ||
-                    obs_predict(&y, rig, o, &pl, xi, toff, P0, &cc, uv, H, Rx) != RP_OK) {
+                    obs_predict(&y, rig, o, &pl, xi, toff, P0, prm->time_jitter_s, &cc, uv, H,
+                                Rx) != RP_OK) {
                     n_bad++;
                     if (used) {
                         used[k] = 0;
