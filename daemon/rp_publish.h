@@ -44,7 +44,8 @@ const char *rp_pub_status_str(rp_pub_status_t s);
      4 + 4 + 1 + 8 * 6 + RP_PUB_INSTANCE_BYTES)
 #define RP_PUB_STATUS_BYTES                                                                    \
     (RP_PUB_HASH_BYTES + 8 + 4 + 4 + 1 + 1 + 4 + 1 + 6 + 4 * 6 + 4 * 6 + 4 * 6 + 2 * 6 +      \
-     2 * 6 + 4 * 6 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 2 + 4 + 4 + RP_PUB_INSTANCE_BYTES + 4)
+     2 * 6 + 4 * 6 + 4 * 6 + 4 * 6 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 2 + 4 + 4 +              \
+     RP_PUB_INSTANCE_BYTES + 4)
 #define RP_PUB_IMAGE_HEAD_BYTES (RP_PUB_HASH_BYTES + 8 + 4 + 1 + 2 + 2 + 4)
 #define RP_PUB_IMAGE_BYTES (RP_PUB_IMAGE_HEAD_BYTES + (RP_HAL_MAX_W) * (RP_HAL_MAX_H))
 #define RP_PUB_FEATS_MAX 512 /* features_t's arrays */

@@ -537,6 +537,49 @@ static void test_camera_times_leave_the_rate_alone(void **state)
     free_fixture(fx);
 }
 
+/* Camera 3's clock jumps from +10 to +30 ms at frame 30 (its offset a converged state): the
+ * jump is found at once (toff_reset), the offset re-estimated within 0.5 ms by frame 50, and
+ * no other frame claims a jump. */
+static void test_clock_jump_is_found_and_reestimated(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0, 2);
+    double truth[RP_SIM_NCAMS] = {0.0, 0.0, 0.0, 0.010, 0.0, 0.0};
+    const double none[RP_SIM_NCAMS] = {0};
+    rp_ekf_t *ekf = cv_ekf();
+    const rp_real sig0[RP_MAX_CAMS] = {0, 0.02, 0.02, 0.02, 0.02, 0.02};
+    rp_real start[RP_MAX_CAMS] = {0};
+    start[3] = RP_C(0.010);
+    assert_ok(rp_ekf_toff_set(ekf, 0x08, start, sig0, RP_C(1e-8)));
+    rp_rng_t rng;
+    rp_rng_seed(&rng, 9);
+    int found_at = -1, false_alarms = 0;
+    for (int j = 1; j <= 50; ++j) {
+        if (j == 30) {
+            truth[3] = 0.030;
+        }
+        assert_ok(rp_ekf_predict(ekf, RP_C(1.0 / 30.0)));
+        const uint32_t n = cv_obs(&fx->sr, j / 30.0, truth, none, 0.5, &rng, fx->obs, 2000);
+        rp_ekf_info_t info;
+        assert_ok(rp_ekf_update(ekf, &fx->sr.rig, fx->obs, n, NULL, &info));
+        if (info.toff_reset) {
+            if (j >= 30 && found_at < 0 && info.toff_reset == 0x08) {
+                found_at = j;
+            } else {
+                false_alarms++;
+            }
+        }
+    }
+    const double est = (double)ekf->toff[3];
+    print_message("clock jump +10 -> +30 ms at frame 30: found at frame %d, %d false alarms, "
+                  "offset at frame 50 %+.3f ms\n", found_at, false_alarms, 1e3 * est);
+    assert_int_equal(found_at, 30);
+    assert_int_equal(false_alarms, 0);
+    assert_true(fabs(est - 0.030) < 0.5e-3);
+    free(ekf);
+    free_fixture(fx);
+}
+
 static void test_toff_set_rejects_bad_input(void **state)
 {
     (void)state;
@@ -584,6 +627,7 @@ int main(void)
         cmocka_unit_test(test_features_apply_at_their_cameras_times),
         cmocka_unit_test(test_clock_offsets_are_estimated),
         cmocka_unit_test(test_camera_times_leave_the_rate_alone),
+        cmocka_unit_test(test_clock_jump_is_found_and_reestimated),
         cmocka_unit_test(test_toff_set_rejects_bad_input),
     };
     return cmocka_run_group_tests_name("ekf", tests, NULL, NULL);

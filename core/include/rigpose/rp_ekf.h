@@ -19,7 +19,10 @@
  * plus toff[k] (s). Offsets are either fixed (known) or states of the filter (toff_mask):
  * a random walk of density q_toff (s^2/s), observed through the image motion of the features
  * (d uv / d toff_k = J_pose [v; omega]), as OpenVINS estimates a camera-IMU time offset.
- * Camera 0 is the reference (its offset is not a state).
+ * Camera 0 is the reference (its offset is not a state). A clock that jumps (a camera
+ * restarted) shows as most of that camera's features gated out while the others' are used: its
+ * offset state then restarts at its start sigma and the update runs again
+ * (rp_ekf_info_t.toff_reset).
  * Update: iterated EKF (Gauss-Newton on the posterior, `iterations` relinearisations), computed
  * in information form (the sum of H^T R^-1 H over features is DxD, whatever their number), so
  * the covariance stays symmetric positive definite by construction. D = 6 (the pose; the rate
@@ -107,6 +110,11 @@ typedef struct {
     rp_real rms_px;    /* RMS residual per pixel coordinate of the used features, at the last
                         * linearisation point (pixels) */
     uint8_t cov_reset; /* 1 if the covariance had to be reset (numerical fault) */
+    uint8_t toff_reset;/* bit c: camera c's clock jumped (most of its features gated out, the
+                        * others' used): its offset state restarted at the start sigma and the
+                        * update ran again (rp_ekf_update) */
+    uint16_t n_used_cam[RP_MAX_CAMS];  /* n_used per camera */
+    uint16_t n_gated_cam[RP_MAX_CAMS]; /* n_gated per camera */
 } rp_ekf_info_t;
 
 /* Start the filter at x0 with diagonal covariance P0diag; the clock offsets at prm->toff0_s,

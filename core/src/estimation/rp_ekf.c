@@ -588,13 +588,9 @@ static rp_status_t condition_rate(const rp_ekf_t *e0, const rp_real L[36], const
     return RP_OK;
 }
 
-rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
-                          uint8_t *used, rp_ekf_info_t *info)
+static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs,
+                               uint32_t n, uint8_t *used, rp_ekf_info_t *info)
 {
-    rp_ekf_info_t dummy;
-    if (!info) {
-        info = &dummy;
-    }
     memset(info, 0, sizeof(*info));
     if (!ekf || !rig || (n > 0 && !obs)) {
         return RP_E_ARG;
@@ -647,6 +643,8 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
         for (int pass = 0; pass < 2; ++pass) {
             memset(A, 0, sizeof(A));
             memset(b, 0, sizeof(b));
+            memset(info->n_used_cam, 0, sizeof(info->n_used_cam));
+            memset(info->n_gated_cam, 0, sizeof(info->n_gated_cam));
             n_used = n_gated = n_bad = 0;
             sq_sum = RP_C(0.0);
             for (uint32_t k = 0; k < n; ++k) {
@@ -668,6 +666,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
                     rp_real d2 = maha_d(H, Cpost, D, s2 / o->w, D == NP ? NULL : Rx, r);
                     if (d2 > prm->gate_chi2) {
                         n_gated++;
+                        info->n_gated_cam[o->cam]++;
                         if (used) {
                             used[k] = 0;
                         }
@@ -678,6 +677,7 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
                     used[k] = 1;
                 }
                 n_used++;
+                info->n_used_cam[o->cam]++;
                 sq_sum += r[0] * r[0] + r[1] * r[1];
                 const rp_real wk = o->w / s2;
                 rp_real rr[2];
@@ -799,4 +799,64 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
     info->n_outside = n_outside;
     info->rms_px = n_used ? rp_sqrt(sq_sum / (RP_C(2.0) * (rp_real)n_used)) : RP_C(0.0);
     return RP_OK;
+}
+
+/* Cameras whose clock jumped in an update: an offset state's camera with most of its features
+ * (at least min_features) gated out while the other cameras' features were mostly used: its
+ * offset has left what its state allows (a camera restarted, a clock stepped), not its
+ * features. Bit c: camera c. */
+static uint8_t clock_jumps(const rp_ekf_t *e, const rp_ekf_info_t *info)
+{
+    uint8_t jumped = 0;
+    for (uint8_t c = 0; c < NO; ++c) {
+        const uint32_t nc = (uint32_t)info->n_used_cam[c] + info->n_gated_cam[c];
+        if (!(e->toff_mask & (1u << c)) || nc < e->prm.min_features ||
+            2u * info->n_gated_cam[c] <= nc) {
+            continue;
+        }
+        uint32_t n_o = 0, g_o = 0;
+        for (uint8_t d = 0; d < NO; ++d) {
+            n_o += d != c ? (uint32_t)info->n_used_cam[d] + info->n_gated_cam[d] : 0u;
+            g_o += d != c ? info->n_gated_cam[d] : 0u;
+        }
+        if (n_o >= e->prm.min_features && 2u * g_o <= n_o) {
+            jumped = (uint8_t)(jumped | (1u << c));
+        }
+    }
+    return jumped;
+}
+
+rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
+                          uint8_t *used, rp_ekf_info_t *info)
+{
+    rp_ekf_info_t dummy;
+    if (!info) {
+        info = &dummy;
+    }
+    if (!ekf || !ekf->toff_mask) {
+        return update_once(ekf, rig, obs, n, used, info);
+    }
+    const rp_ekf_t prior = *ekf;
+    rp_status_t st = update_once(ekf, rig, obs, n, used, info);
+    const uint8_t jumped = st == RP_OK || st == RP_E_TOO_FEW ? clock_jumps(&prior, info) : 0;
+    if (!jumped) {
+        return st;
+    }
+    /* Each such camera's offset starts again from its start sigma (its correlations dropped),
+     * and the update runs again from the prior. */
+    *ekf = prior;
+    for (uint8_t c = 0; c < NO; ++c) {
+        if (jumped & (1u << c)) {
+            for (int i = 0; i < N; ++i) {
+                ekf->Pxo[i * NO + c] = RP_C(0.0);
+            }
+            for (uint8_t d = 0; d < NO; ++d) {
+                ekf->Poo[c * NO + d] = ekf->Poo[d * NO + c] = RP_C(0.0);
+            }
+            ekf->Poo[c * NO + c] = ekf->prm.toff_sigma_s * ekf->prm.toff_sigma_s;
+        }
+    }
+    st = update_once(ekf, rig, obs, n, used, info);
+    info->toff_reset = jumped;
+    return st;
 }
