@@ -24,7 +24,8 @@ RP_STATIC_ASSERT(RIGPOSE_POSE_T_METHOD_STEREO4 == RP_PIPE_STEREO4 &&
 RP_STATIC_ASSERT(RIGPOSE_POSE_T_FLAG_LOST == RP_EST_LOST &&
                      RIGPOSE_POSE_T_FLAG_SCALE_WEAK == RP_EST_SCALE_WEAK &&
                      RIGPOSE_POSE_T_FLAG_HELD == RP_EST_HELD &&
-                     RIGPOSE_POSE_T_FLAG_UNSYNCED == RP_EST_UNSYNCED,
+                     RIGPOSE_POSE_T_FLAG_UNSYNCED == RP_EST_UNSYNCED &&
+                     RIGPOSE_POSE_T_FLAG_CLOCK_JUMP == RP_EST_CLOCK_JUMP,
                  "pose_t.FLAG_* are RP_EST_*");
 /* lcm-gen's sizes are int. */
 RP_STATIC_ASSERT(RP_PUB_IMAGE_BYTES < 0x7fffffff, "image_t fits an int length");

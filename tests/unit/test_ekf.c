@@ -8,6 +8,7 @@
 
 #include "rp_test.h"
 #include "rigpose/rp_ekf.h"
+#include "rigpose/rp_ekf1pt.h"
 #include "rigpose/rp_rot.h"
 #include "rigpose/rp_rig.h"
 #include "rp_sim.h"
@@ -539,11 +540,13 @@ static void test_camera_times_leave_the_rate_alone(void **state)
 
 /* Camera 3's clock jumps from +10 to +30 ms at frame 30 (its offset a converged state): the
  * jump is found at once (toff_reset), the offset re-estimated within 0.5 ms by frame 50, and
- * no other frame claims a jump. */
-static void test_clock_jump_is_found_and_reestimated(void **state)
+ * no other frame claims a jump; through the plain update and through 1-point RANSAC. */
+static void clock_jump_run(int one_point)
 {
-    (void)state;
     fixture_t *fx = fixture(0.0, 2);
+    rp_ekf1pt_t *op = calloc(1, sizeof(*op));
+    assert_non_null(op);
+    assert_ok(rp_ekf1pt_seed(op, 1));
     double truth[RP_SIM_NCAMS] = {0.0, 0.0, 0.0, 0.010, 0.0, 0.0};
     const double none[RP_SIM_NCAMS] = {0};
     rp_ekf_t *ekf = cv_ekf();
@@ -561,7 +564,13 @@ static void test_clock_jump_is_found_and_reestimated(void **state)
         assert_ok(rp_ekf_predict(ekf, RP_C(1.0 / 30.0)));
         const uint32_t n = cv_obs(&fx->sr, j / 30.0, truth, none, 0.5, &rng, fx->obs, 2000);
         rp_ekf_info_t info;
-        assert_ok(rp_ekf_update(ekf, &fx->sr.rig, fx->obs, n, NULL, &info));
+        rp_ekf1pt_info_t info1;
+        if (one_point) {
+            assert_ok(rp_ekf1pt_update(op, ekf, &fx->sr.rig, fx->obs, n, NULL, NULL, &info1));
+            info = info1.ekf;
+        } else {
+            assert_ok(rp_ekf_update(ekf, &fx->sr.rig, fx->obs, n, NULL, &info));
+        }
         if (info.toff_reset) {
             if (j >= 30 && found_at < 0 && info.toff_reset == 0x08) {
                 found_at = j;
@@ -571,13 +580,22 @@ static void test_clock_jump_is_found_and_reestimated(void **state)
         }
     }
     const double est = (double)ekf->toff[3];
-    print_message("clock jump +10 -> +30 ms at frame 30: found at frame %d, %d false alarms, "
-                  "offset at frame 50 %+.3f ms\n", found_at, false_alarms, 1e3 * est);
+    print_message("clock jump +10 -> +30 ms at frame 30, %s: found at frame %d, %d false "
+                  "alarms, offset at frame 50 %+.3f ms\n", one_point ? "1-point RANSAC" :
+                  "plain update", found_at, false_alarms, 1e3 * est);
     assert_int_equal(found_at, 30);
     assert_int_equal(false_alarms, 0);
     assert_true(fabs(est - 0.030) < 0.5e-3);
     free(ekf);
+    free(op);
     free_fixture(fx);
+}
+
+static void test_clock_jump_is_found_and_reestimated(void **state)
+{
+    (void)state;
+    clock_jump_run(0);
+    clock_jump_run(1);
 }
 
 static void test_toff_set_rejects_bad_input(void **state)

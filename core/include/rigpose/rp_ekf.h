@@ -134,6 +134,18 @@ rp_status_t rp_ekf_toff_set(rp_ekf_t *ekf, uint8_t mask, const rp_real toff0[RP_
  * (re)started at a new pose: the cross-covariance with the pose is dropped. RP_E_ARG. */
 rp_status_t rp_ekf_toff_carry(rp_ekf_t *dst, const rp_ekf_t *src);
 
+/* Cameras whose clock jumped: of filter e's offset states, a camera with most of its features
+ * (at least min_features) left out of an update (n_left: gated, or outside a RANSAC consensus)
+ * while the other cameras' were mostly used (n_used): its offset has left what its state
+ * allows (a camera restarted, a clock stepped), not its features. Bit c: camera c. 0 for NULL.
+ * rp_ekf_update applies it to its own gate; rp_ekf1pt_update to its consensus. */
+uint8_t rp_ekf_clock_jumps(const rp_ekf_t *e, const uint16_t n_used[RP_MAX_CAMS],
+                           const uint16_t n_left[RP_MAX_CAMS]);
+
+/* Restart the offset states of cameras cams (bit c) at the start sigma (prm.toff_sigma_s), their
+ * correlations dropped; cameras without an offset state are left alone. NULL: nothing. */
+void rp_ekf_toff_restart(rp_ekf_t *ekf, uint8_t cams);
+
 /* Time update over dt seconds (dt > 0, finite; else RP_E_ARG and no change; RP_E_NAN and no
  * change for a non-finite pose or rate).
  * Bounded prediction: the constant-velocity model extrapolates for at most prm.max_predict_s

@@ -63,9 +63,11 @@ enum {
     RP_EST_HELD         = 1u << 8, /* no update for longer than the filter's max_predict_s: the
                                     * pose is held, not extrapolated, its covariance growing
                                     * (rp_ekf_predict); always with LOST */
-    RP_EST_UNSYNCED     = 1u << 9  /* a stereo pair's two images were farther apart in time than
+    RP_EST_UNSYNCED     = 1u << 9, /* a stereo pair's two images were farther apart in time than
                                     * the layout allows (max_pair_skew_s): no new landmarks from
                                     * it this time */
+    RP_EST_CLOCK_JUMP   = 1u << 10 /* a camera's clock jumped: its offset state restarted
+                                    * (rp_ekf_info_t.toff_reset) */
 };
 
 typedef struct {

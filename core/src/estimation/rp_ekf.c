@@ -801,29 +801,43 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
     return RP_OK;
 }
 
-/* Cameras whose clock jumped in an update: an offset state's camera with most of its features
- * (at least min_features) gated out while the other cameras' features were mostly used: its
- * offset has left what its state allows (a camera restarted, a clock stepped), not its
- * features. Bit c: camera c. */
-static uint8_t clock_jumps(const rp_ekf_t *e, const rp_ekf_info_t *info)
+uint8_t rp_ekf_clock_jumps(const rp_ekf_t *e, const uint16_t n_used[RP_MAX_CAMS],
+                           const uint16_t n_left[RP_MAX_CAMS])
 {
     uint8_t jumped = 0;
+    if (!e || !n_used || !n_left) {
+        return 0;
+    }
     for (uint8_t c = 0; c < NO; ++c) {
-        const uint32_t nc = (uint32_t)info->n_used_cam[c] + info->n_gated_cam[c];
-        if (!(e->toff_mask & (1u << c)) || nc < e->prm.min_features ||
-            2u * info->n_gated_cam[c] <= nc) {
+        const uint32_t nc = (uint32_t)n_used[c] + n_left[c];
+        if (!(e->toff_mask & (1u << c)) || nc < e->prm.min_features || 2u * n_left[c] <= nc) {
             continue;
         }
-        uint32_t n_o = 0, g_o = 0;
+        uint32_t n_o = 0, l_o = 0;
         for (uint8_t d = 0; d < NO; ++d) {
-            n_o += d != c ? (uint32_t)info->n_used_cam[d] + info->n_gated_cam[d] : 0u;
-            g_o += d != c ? info->n_gated_cam[d] : 0u;
+            n_o += d != c ? (uint32_t)n_used[d] + n_left[d] : 0u;
+            l_o += d != c ? n_left[d] : 0u;
         }
-        if (n_o >= e->prm.min_features && 2u * g_o <= n_o) {
+        if (n_o >= e->prm.min_features && 2u * l_o <= n_o) {
             jumped = (uint8_t)(jumped | (1u << c));
         }
     }
     return jumped;
+}
+
+void rp_ekf_toff_restart(rp_ekf_t *ekf, uint8_t cams)
+{
+    for (uint8_t c = 0; ekf && c < NO; ++c) {
+        if ((cams & (1u << c)) && (ekf->toff_mask & (1u << c))) {
+            for (int i = 0; i < N; ++i) {
+                ekf->Pxo[i * NO + c] = RP_C(0.0);
+            }
+            for (uint8_t d = 0; d < NO; ++d) {
+                ekf->Poo[c * NO + d] = ekf->Poo[d * NO + c] = RP_C(0.0);
+            }
+            ekf->Poo[c * NO + c] = ekf->prm.toff_sigma_s * ekf->prm.toff_sigma_s;
+        }
+    }
 }
 
 rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs, uint32_t n,
@@ -838,24 +852,16 @@ rp_status_t rp_ekf_update(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *ob
     }
     const rp_ekf_t prior = *ekf;
     rp_status_t st = update_once(ekf, rig, obs, n, used, info);
-    const uint8_t jumped = st == RP_OK || st == RP_E_TOO_FEW ? clock_jumps(&prior, info) : 0;
+    const uint8_t jumped = st == RP_OK || st == RP_E_TOO_FEW
+                               ? rp_ekf_clock_jumps(&prior, info->n_used_cam, info->n_gated_cam)
+                               : 0;
     if (!jumped) {
         return st;
     }
     /* Each such camera's offset starts again from its start sigma (its correlations dropped),
      * and the update runs again from the prior. */
     *ekf = prior;
-    for (uint8_t c = 0; c < NO; ++c) {
-        if (jumped & (1u << c)) {
-            for (int i = 0; i < N; ++i) {
-                ekf->Pxo[i * NO + c] = RP_C(0.0);
-            }
-            for (uint8_t d = 0; d < NO; ++d) {
-                ekf->Poo[c * NO + d] = ekf->Poo[d * NO + c] = RP_C(0.0);
-            }
-            ekf->Poo[c * NO + c] = ekf->prm.toff_sigma_s * ekf->prm.toff_sigma_s;
-        }
-    }
+    rp_ekf_toff_restart(ekf, jumped);
     st = update_once(ekf, rig, obs, n, used, info);
     info->toff_reset = jumped;
     return st;

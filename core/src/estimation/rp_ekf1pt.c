@@ -363,6 +363,26 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
             break;
         }
     }
+    /* A camera whose clock jumped (rp_ekf_clock_jumps on the consensus): its features are all
+     * outliers of a prior that puts them at the old offset. Its offset restarts, and the
+     * filter's plain gated update runs from the prior on every observation. */
+    if (st == RP_OK && s->prior.toff_mask) {
+        uint16_t in_cam[RP_MAX_CAMS] = {0}, out_cam[RP_MAX_CAMS] = {0};
+        for (uint32_t k = 0; k < n; ++k) {
+            if (s->ok[k] && obs[k].cam < RP_MAX_CAMS) {
+                in_cam[obs[k].cam] = (uint16_t)(in_cam[obs[k].cam] + (s->cand[k] != 0));
+                out_cam[obs[k].cam] = (uint16_t)(out_cam[obs[k].cam] + (s->cand[k] == 0));
+            }
+        }
+        const uint8_t jumped = rp_ekf_clock_jumps(&s->prior, in_cam, out_cam);
+        if (jumped) {
+            *ekf = s->prior;
+            rp_ekf_toff_restart(ekf, jumped);
+            const rp_status_t st1 = rp_ekf_update(ekf, rig, obs, n, used, &info->ekf);
+            info->ekf.toff_reset = (uint8_t)(info->ekf.toff_reset | jumped);
+            return st1;
+        }
+    }
     if (used) {
         memcpy(used, s->cand, n);
     }

@@ -572,6 +572,9 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
         if (info.cov_reset) {
             flags |= RP_EST_COV_RESET;
         }
+        if (info.toff_reset) {
+            flags |= RP_EST_CLOCK_JUMP;
+        }
         if (st == RP_OK) {
             for (uint32_t i = 0, k = 0; i < n; ++i) {
                 vo->used[i] = 0;

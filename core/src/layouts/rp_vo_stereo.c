@@ -629,6 +629,9 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         if (info.cov_reset) {
             flags |= RP_EST_COV_RESET;
         }
+        if (info.toff_reset) {
+            flags |= RP_EST_CLOCK_JUMP;
+        }
     }
 
     for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
