@@ -756,7 +756,8 @@ static void test_replay_camera_times_malformed(void **state)
         {"2e3", "utime_us_cam1 '2e3' is not a time"},
         {"99999999999999999999", "is not a time"},
         {"2305843009213693953", "utime_us_cam1 2305843009213693953 more than 2^31 - 1 us"},
-        {"2147483668", "utime_us_cam1 2147483668 more than 2^31 - 1 us (35 min) from utime_us 20"},
+        {"2147483668",
+         "utime_us_cam1 2147483668 more than 2^31 - 1 us (35 min) from utime_us 20"},
         {"-2147483629", "utime_us_cam1 -2147483629 more than 2^31 - 1 us"},
         {"\x1b[31m", "utime_us_cam1 '\\x1b[31m' is not a time"}};
     for (int k = 0; k < 9; k++) {
