@@ -464,18 +464,24 @@ static void phased_step(rp_pipe_t *p, const rp_image_t *const ptr[], int64_t uti
     assert_true(st == RP_OK || st == RP_E_TOO_FEW);
 }
 
+/* pipe and pipe2 on the same configuration of layout l (gc: the room's depth prior). */
+static void init_both(rp_pipe_layout_t l)
+{
+    rp_pipe_cfg_t cfg;
+    assert_ok(rp_pipe_default_cfg(l, &cfg));
+    cfg.gc.init_depth_m = RP_C(1.2);
+    cfg.gc.init_depth_sigma_m = RP_C(0.3);
+    cfg.gc.init_on_sphere = 1;
+    assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
+    assert_ok(rp_pipe_init(&pipe2, &rig, &cfg));
+}
+
 static void test_phased_step_is_the_step(void **state)
 {
     (void)state;
     static const rp_pipe_layout_t layouts[2] = {RP_PIPE_STEREO4, RP_PIPE_GC};
     for (int li = 0; li < 2; ++li) {
-        rp_pipe_cfg_t cfg;
-        assert_ok(rp_pipe_default_cfg(layouts[li], &cfg));
-        cfg.gc.init_depth_m = RP_C(1.2);
-        cfg.gc.init_depth_sigma_m = RP_C(0.3);
-        cfg.gc.init_on_sphere = 1;
-        assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
-        assert_ok(rp_pipe_init(&pipe2, &rig, &cfg));
+        init_both(layouts[li]);
         assert_int_equal(rp_pipe_n_trackers(&pipe), 4);
         assert_int_equal(rp_pipe_n_pairs(&pipe), layouts[li] == RP_PIPE_GC ? 0 : 2);
         uint8_t cam = 99;
@@ -539,13 +545,7 @@ static void test_camera_times(void **state)
     (void)state;
     static const rp_pipe_layout_t layouts[2] = {RP_PIPE_STEREO4, RP_PIPE_GC};
     for (int li = 0; li < 2; ++li) {
-        rp_pipe_cfg_t cfg;
-        assert_ok(rp_pipe_default_cfg(layouts[li], &cfg));
-        cfg.gc.init_depth_m = RP_C(1.2);
-        cfg.gc.init_depth_sigma_m = RP_C(0.3);
-        cfg.gc.init_on_sphere = 1;
-        assert_ok(rp_pipe_init(&pipe, &rig, &cfg));
-        assert_ok(rp_pipe_init(&pipe2, &rig, &cfg));
+        init_both(layouts[li]);
         for (int j = 0; j < 6; ++j) {
             rp_image_t im[NCAM];
             const rp_image_t *ptr[NCAM];

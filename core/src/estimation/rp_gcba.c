@@ -313,8 +313,18 @@ static void prepare_poses(rp_gcba_t *ba, int nk)
 {
     ba->mu_now = implied_mu(ba, nk, NULL);
     for (int k = 0; k < nk; ++k) {
+        const rp_gcba_kf_t *kf = kf_at(ba, k);
         for (uint8_t c = 0; c < RP_MAX_CAMS; ++c) {
-            ba->pl_ok[k][c] = (uint8_t)(cam_pose(ba, k, c, &ba->pl[k][c]) == RP_OK);
+            uint8_t same = 0; /* a camera before c at the same time: its pose (synchronised: one) */
+            while (same < c && kf->cam_dt[same] != kf->cam_dt[c]) {
+                ++same;
+            }
+            if (same < c) {
+                ba->pl[k][c] = ba->pl[k][same];
+                ba->pl_ok[k][c] = ba->pl_ok[k][same];
+            } else {
+                ba->pl_ok[k][c] = (uint8_t)(cam_pose(ba, k, c, &ba->pl[k][c]) == RP_OK);
+            }
         }
     }
 }
