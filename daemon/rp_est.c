@@ -24,7 +24,7 @@ unsigned rp_est_threads_for(const rp_config_t *cfg, unsigned online_cores)
     unsigned cams = l == RP_PIPE_STEREO4 ? 4u
                     : l == RP_PIPE_STEREO2 ? 2u
                     : l == RP_PIPE_GC      ? cfg->pipe.gc.n_cams
-                    : l == RP_PIPE_RC      ? (unsigned)RP_RC_MAX_CAMS
+                    : l == RP_PIPE_RC      ? (unsigned)cfg->pipe.rc_n
                                            : 1u;
     unsigned n = online_cores < cams ? online_cores : cams;
     return n < 1 ? 1u : n > RP_POOL_MAX_THREADS ? RP_POOL_MAX_THREADS : n;

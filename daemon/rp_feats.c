@@ -45,7 +45,7 @@ uint8_t rp_feats_layout_cams(const rp_pipe_cfg_t *cfg, uint8_t n_cams, uint8_t w
         }
         break;
     case RP_PIPE_RC:
-        for (uint8_t i = 0; i < RP_RC_MAX_CAMS; ++i) {
+        for (uint8_t i = 0; i < cfg->rc_n && i < RP_RC_MAX_CAMS; ++i) {
             mark(want, n_cams, cfg->rc_cams[i]);
         }
         break;

@@ -637,10 +637,35 @@ static void test_single_camera_methods(void **state)
         }
         assert_int_equal(g_cfg.pipe.layout, cases[i].want);
         if (cases[i].want == RP_PIPE_RC) {
+            assert_int_equal(g_cfg.pipe.rc_n, 4);
             assert_int_equal(g_cfg.pipe.rc_cams[0], cases[i].cam0);
             assert_int_equal(g_cfg.pipe.rc_cams[3], 3);
         } else {
             assert_int_equal(g_cfg.pipe.mono.cam, cases[i].cam0);
+        }
+    }
+    /* rc with a list: 2..4 cameras (a rig of two, e.g. a stereo rig's cameras used singly);
+     * one camera is not a fusion and is refused */
+    const char *const m_rc = "  method: rc     ";
+    memcpy(m, m_rc, strlen(m_rc));
+    char *pl = strstr(text, "  pairs: [[cam1, cam1b], [cam3, cam3b]]");
+    assert_non_null(pl);
+    static const struct { const char *line; rp_cfg_status_t st; uint8_t n; } lists[] = {
+        {"  cams: [cam1, cam3]                   ", RP_CFG_OK, 2},
+        {"  cams: [cam1, cam2, cam4]             ", RP_CFG_OK, 3},
+        {"  cams: [cam1]                         ", RP_CFG_E_TYPE, 0},
+    };
+    for (size_t i = 0; i < sizeof lists / sizeof lists[0]; ++i) {
+        assert_int_equal(strlen(lists[i].line), strlen("  pairs: [[cam1, cam1b], [cam3, cam3b]]"));
+        memcpy(pl, lists[i].line, strlen(lists[i].line));
+        const rp_cfg_status_t st = rp_config_parse(text, n, "sim.yaml", &g_cfg, g_err, sizeof g_err);
+        assert_int_equal(st, lists[i].st);
+        if (st == RP_CFG_OK) {
+            assert_int_equal(g_cfg.pipe.rc_n, lists[i].n);
+            assert_int_equal(g_cfg.pipe.rc_cams[0], 0);
+            assert_int_equal(g_cfg.pipe.rc_cams[lists[i].n - 1], lists[i].n == 2 ? 2 : 3);
+        } else {
+            assert_non_null(strstr(g_err, "estimator.cams"));
         }
     }
 }

@@ -78,7 +78,7 @@
     X(mono.init_depth_sigma_m, RP_CD_MONO, R) X(mono.default_dt_s, RP_CD_MONO, R)                \
     X(mono.weight_by_structure, RP_CD_MONO, U) X(mono.one_point, RP_CD_MONO, U)                  \
     X(mono.ransac, RP_CD_MONO, U)                                                                 \
-    X(rc_cams, RP_CD_RC, A) X(rc.min_trans_m, RP_CD_RC, R) X(rc.min_scale, RP_CD_RC, R)          \
+    X(rc_cams, RP_CD_RC, A) X(rc_n, RP_CD_RC, U) X(rc.min_trans_m, RP_CD_RC, R) X(rc.min_scale, RP_CD_RC, R)          \
     X(rc.max_scale, RP_CD_RC, R) X(rc.max_scale_se, RP_CD_RC, R)
 
 /* 1 if layout l runs a field of that use. */

@@ -365,7 +365,8 @@ static void usage(FILE *out, const char *argv0)
             "                   occurs\n"
             "  --trace R|all    one line per frame of run R (or of every run) on stderr: the\n"
             "                   turn's angle and the true beta (deg), per method its status,\n"
-            "                   geodesic rotation error (deg) and |tx| (m)\n"
+            "                   geodesic rotation error (deg), |tx| (m) and its flags (hex,\n"
+            "                   rp_frame.h RP_EST_*)\n"
             "  --threads N      worker threads (default: online CPUs)\n"
             "  --ekf-iterations N  Gauss-Newton iterations of the EKF update (default 3;\n"
             "                   1 = the plain EKF), for ablation\n"
@@ -818,9 +819,9 @@ static void *worker(void *arg)
                 }
                 if ((int64_t)r == o->trace_run || o->trace_run == -2) {
                     trace_len += snprintf(trace + trace_len, sizeof trace - trace_len,
-                                          " | %s %d %.3f %.5f", rp_pipe_layout_name(o->m[m]->layout),
+                                          " | %s %d %.3f %.5f 0x%x", rp_pipe_layout_name(o->m[m]->layout),
                                           (int)st, geodesic(truth_R, est.p) * 180.0 / SIM_PI,
-                                          fabs((double)est.p[0] - truth[0]));
+                                          fabs((double)est.p[0] - truth[0]), (unsigned)est.flags);
                     if (trace_len >= (int)sizeof trace) {
                         trace_len = (int)sizeof trace - 1;
                     }

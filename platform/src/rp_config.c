@@ -976,10 +976,13 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         const size_t want = layout == RP_PIPE_RC ? RP_RC_MAX_CAMS : 1;
         const size_t first = layout == RP_PIPE_RC ? 0 : (size_t)(layout - RP_PIPE_CAM1);
         if (cams != NULL) {
-            if (name_list(c, cfg, cams, "estimator.cams", want, want, idx, &n, taken) != 0) {
+            /* rc: 2..RP_RC_MAX_CAMS cameras, the first the reference */
+            if (name_list(c, cfg, cams, "estimator.cams", layout == RP_PIPE_RC ? 2 : want, want,
+                          idx, &n, taken) != 0) {
                 return -1;
             }
         } else {
+            n = want;
             for (size_t k = 0; k < want; ++k) {
                 int found = 0;
                 for (uint8_t j = 0; j < cfg->rig.n_cams; ++j) {
@@ -996,7 +999,9 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
             }
         }
         if (layout == RP_PIPE_RC) {
-            memcpy(pc->rc_cams, idx, want);
+            memset(pc->rc_cams, 0, sizeof pc->rc_cams);
+            memcpy(pc->rc_cams, idx, n);
+            pc->rc_n = (uint8_t)n;
         } else {
             pc->mono.cam = idx[0];
         }

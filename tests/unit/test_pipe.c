@@ -68,11 +68,17 @@ typedef struct {
     int n_ok;
 } run_t;
 
+/* rc's cameras for run_layout: the first g_rc_n of g_rc_cams (default: the paper's four) */
+static uint8_t g_rc_n = RP_RC_MAX_CAMS;
+static uint8_t g_rc_cams[RP_RC_MAX_CAMS] = {0, 1, 2, 3};
+
 /* Runs the pipeline over the frames; drop_cam >= 0 withholds that camera at frame drop_at. */
 static run_t run_layout(rp_pipe_layout_t layout, int nframes, int drop_cam, int drop_at)
 {
     rp_pipe_cfg_t cfg;
     assert_ok(rp_pipe_default_cfg(layout, &cfg));
+    cfg.rc_n = g_rc_n;
+    memcpy(cfg.rc_cams, g_rc_cams, sizeof cfg.rc_cams);
     cfg.gc.init_depth_m = RP_C(1.2); /* the room's typical range */
     cfg.gc.init_depth_sigma_m = RP_C(0.3);
     cfg.gc.init_on_sphere = 1;
@@ -156,8 +162,8 @@ static void test_gc_tracks_motion(void **state)
     assert_true(r.a_err < 0.005);
 }
 
-/* cam1 alone and the rigidity constraints run end to end (a few frames: their accuracy is the
- * simulator's business). */
+/* cam1 alone and the rigidity constraints (on four cameras and on two) run end to end (a few
+ * frames: their accuracy is the simulator's business). */
 static void test_single_camera_and_rc_run(void **state)
 {
     (void)state;
@@ -167,6 +173,25 @@ static void test_single_camera_and_rc_run(void **state)
     const run_t rc = run_layout(RP_PIPE_RC, 4, -1, -1);
     assert_int_equal(rc.n_ok, 4);
     assert_true(rc.a_err < 0.05);
+    /* rc on two of the rig's cameras (cam1 the reference, cam3 facing away) */
+    g_rc_n = 2;
+    g_rc_cams[1] = 2;
+    const run_t rc2 = run_layout(RP_PIPE_RC, 4, -1, -1);
+    g_rc_n = RP_RC_MAX_CAMS;
+    g_rc_cams[1] = 1;
+    assert_int_equal(rc2.n_ok, 4);
+    assert_true(rc2.a_err < 0.05);
+    const rp_pipe_info_t *info;
+    assert_ok(rp_pipe_info(&pipe, &info));
+    assert_int_equal(info->cam_state[1], RP_PIPE_CAM_UNUSED);
+    assert_int_equal(info->cam_state[2], RP_PIPE_CAM_OK);
+    /* one camera is no fusion; more than RP_RC_MAX_CAMS do not fit */
+    rp_pipe_cfg_t cfg;
+    assert_ok(rp_pipe_default_cfg(RP_PIPE_RC, &cfg));
+    cfg.rc_n = 1;
+    assert_int_equal(rp_pipe_init(&pipe, &rig, &cfg), RP_E_ARG);
+    cfg.rc_n = RP_RC_MAX_CAMS + 1;
+    assert_int_equal(rp_pipe_init(&pipe, &rig, &cfg), RP_E_ARG);
 }
 
 /* Track ids across the serial's wrap (rp_track.h): every tracker starts 60 serials before

@@ -179,12 +179,17 @@ static void test_wrong_assumed_depth_is_corrected_by_the_offsets(void **state)
             run_sequence(fx, &cfg, 100, NULL, &o);
             assert_int_equal(o.lost, 0);
             for (int i = 0; i < 6; ++i) (on ? err_on : err_off)[i] += o.err[i] / runs;
+            /* RP_EST_SCALE_WEAK: raised while the unit is the assumed depth's, cleared once
+             * the windows have told it as well as the reported covariance claims */
             if (on) {
                 mu += (double)fx->vo.mu / runs;
                 assert_true(fx->vo.n_ba > 5);
+                assert_true(o.flags_or & RP_EST_SCALE_WEAK); /* at the start */
+                assert_false(fx->sim.est.flags & RP_EST_SCALE_WEAK);
             } else {
                 assert_int_equal(fx->vo.n_ba, 0);
                 assert_near(fx->vo.mu, 1.0, 0.0);
+                assert_true(fx->sim.est.flags & RP_EST_SCALE_WEAK);
             }
             simfx_free(fx);
         }

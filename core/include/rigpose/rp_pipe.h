@@ -12,7 +12,8 @@
  *   stereo2  one stereo pair (n_pairs = 1)
  *   gc       single cameras (cfg.gc.cams), rigpose's generalised-camera EKF
  *   cam1..cam4  one single camera alone (cfg.mono.cam), pose mapped to the rig frame
- *   rc       four single cameras (cfg.rc_cams) fused by the paper's rigidity constraints
+ *   rc       single cameras (cfg.rc_cams, cfg.rc_n of them: 2..4, the paper's four by
+ *            default) fused by the paper's rigidity constraints
  *
  * Stereo pairs and feature ids. The first camera of a pair ("left", a) runs a full tracker
  * (detection, tracking, top-up). The second ("right", b) never detects: it only tracks the
@@ -95,7 +96,8 @@ typedef struct {
     rp_vo_gc_cfg_t gc;        /* gc: the estimator and its cameras */
     rp_vo_mono_cfg_t mono;    /* cam1..cam4: the estimator and its camera; rc: the settings of
                                * its four single-camera estimators (mono.cam is overridden) */
-    uint8_t rc_cams[RP_RC_MAX_CAMS]; /* rc: the four cameras, rc_cams[0] the reference (cam1) */
+    uint8_t rc_cams[RP_RC_MAX_CAMS]; /* rc: its cameras, rc_cams[0] the reference (cam1) */
+    uint8_t rc_n;             /* rc: how many of rc_cams, 2..RP_RC_MAX_CAMS (default 4) */
     rp_rc_params_t rc;        /* rc: fusion parameters */
 } rp_pipe_cfg_t;
 

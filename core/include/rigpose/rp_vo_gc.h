@@ -67,6 +67,12 @@
  *     offsets, (b) writes the window's solved poses back into the keyframes, (c) sets the
  *     filter's pose to the newest keyframe's solution, the map following rigidly, and
  *     (d) replaces the adjusted landmarks' positions and covariances by the solution's.
+ *  7. RP_EST_SCALE_WEAK says the metric scale is poorly determined: while fewer than
+ *     min_mature landmarks have converged; always without step 6 (the scale is the assumed
+ *     depth's); with step 6 while mu's relative standard deviation is over scale_sigma, the
+ *     scale error the reported covariance claims (before enough windows are fused, and for as
+ *     long as the motion does not tell the unit: a straight drive without rotation moves every
+ *     camera alike, so the offsets say nothing, no window is taken and mu keeps its prior).
  * Output: an rp_estimate_t, the pose of cam1 in the world (rp_frame.h).
  */
 #ifndef RP_VO_GC_H

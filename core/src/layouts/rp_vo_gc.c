@@ -593,11 +593,17 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
         if (n_gated > 0) {
             flags |= RP_EST_GATED;
         }
-        if (n_mature < vo->cfg.min_mature) {
-            flags |= RP_EST_SCALE_WEAK;
-        }
         refine_structure(vo, n);
         rp_vo_gc_scale_step(vo, fs, refind_ran);
+        /* the scale is weak while the landmarks have not converged; without step 6 always
+         * (the assumed depth's); with it while the map's unit is known less well than the
+         * reported covariance claims: its relative standard deviation over scale_sigma (no
+         * window fused yet, or too few: a straight drive does not tell the unit, the prior's
+         * stays) */
+        if (n_mature < vo->cfg.min_mature || !(vo->cfg.mscale_sigma > RP_C(0.0)) ||
+            vo->mu_var > vo->cfg.scale_sigma * vo->cfg.scale_sigma * vo->mu * vo->mu) {
+            flags |= RP_EST_SCALE_WEAK;
+        }
     } else {
         flags |= RP_EST_LOST;
     }

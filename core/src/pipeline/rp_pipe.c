@@ -73,6 +73,7 @@ rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg)
         cfg->gc.cams[i] = i;
         cfg->rc_cams[i] = i;
     }
+    cfg->rc_n = RP_RC_MAX_CAMS;
     cfg->rc = rp_rc_default_params();
     return RP_OK;
 }
@@ -136,10 +137,10 @@ static rp_status_t init_trackers(rp_pipe_t *pipe)
     } else if (is_single(cfg->layout)) {
         st = add_tracker(pipe, cfg->mono.cam, 0);
     } else {
-        if (RP_RC_MAX_CAMS > RP_PIPE_MAX_TRACKERS) {
+        if (cfg->rc_n < 2 || cfg->rc_n > RP_RC_MAX_CAMS || cfg->rc_n > RP_PIPE_MAX_TRACKERS) {
             return RP_E_ARG;
         }
-        for (uint8_t i = 0; i < RP_RC_MAX_CAMS && st == RP_OK; ++i) {
+        for (uint8_t i = 0; i < cfg->rc_n && st == RP_OK; ++i) {
             st = add_tracker(pipe, cfg->rc_cams[i], 0);
         }
     }
@@ -158,7 +159,7 @@ static rp_status_t init_estimator(rp_pipe_t *pipe)
     if (is_single(cfg->layout)) {
         return rp_vo_mono_init(&pipe->est.single.mono[0], pipe->rig, &cfg->mono);
     }
-    for (uint8_t i = 0; i < RP_RC_MAX_CAMS; ++i) {
+    for (uint8_t i = 0; i < cfg->rc_n; ++i) {
         rp_vo_mono_cfg_t mc = cfg->mono;
         mc.cam = cfg->rc_cams[i];
         const rp_status_t st = rp_vo_mono_init(&pipe->est.single.mono[i], pipe->rig, &mc);
@@ -324,14 +325,14 @@ static void track_one(rp_pipe_t *pipe, uint8_t t, const rp_image_t *img, int64_t
     info->cam_state[cam] = n > 0 ? RP_PIPE_CAM_OK : RP_PIPE_CAM_NO_FEATURES;
 }
 
-/* rc: the four cameras' own estimators fused by the rigidity constraints (rp_rc.h); a
+/* rc: the rc_n cameras' own estimators fused by the rigidity constraints (rp_rc.h); a
  * degenerate frame keeps the last accepted scale. */
 static rp_status_t rc_step(rp_pipe_t *pipe, rp_estimate_t *est)
 {
     rp_real p_own[RP_RC_MAX_CAMS][6];
     rp_status_t st_ref = RP_OK;
     uint16_t n_used[RP_MAX_CAMS] = {0};
-    for (uint8_t i = 0; i < RP_RC_MAX_CAMS; ++i) {
+    for (uint8_t i = 0; i < pipe->cfg.rc_n; ++i) {
         rp_estimate_t rig_est, own;
         const uint8_t cam = pipe->cfg.rc_cams[i];
         const rp_status_t st = rp_vo_mono_step(&pipe->est.single.mono[i], &pipe->fs, &rig_est,
@@ -346,7 +347,7 @@ static rp_status_t rc_step(rp_pipe_t *pipe, rp_estimate_t *est)
     memcpy(est->n_used, n_used, sizeof(n_used));
     rp_real s[RP_RC_MAX_CAMS];
     uint32_t flags = est->flags & ~(uint32_t)RP_EST_SCALE_WEAK;
-    if (rp_rc_fuse(pipe->rig, pipe->cfg.rc_cams, RP_RC_MAX_CAMS, (const rp_real(*)[6])p_own,
+    if (rp_rc_fuse(pipe->rig, pipe->cfg.rc_cams, pipe->cfg.rc_n, (const rp_real(*)[6])p_own,
                    &pipe->cfg.rc, pipe->est.single.last_scale, est->p, s, &flags) == RP_OK) {
         pipe->est.single.last_scale = s[0];
     }

@@ -1,8 +1,9 @@
 /*
- * rigpose-realdata - rigpose's stereo layout on real camera data: a KITTI odometry or EuRoC MAV
+ * rigpose-realdata - rigpose's layouts on real camera data: a KITTI odometry or EuRoC MAV
  * folder (rp_realdata.hpp: calibration -> a rig of one stereo pair, ground truth in rigpose's
- * conventions) -> the core's image pipeline (rp_pipe.h, layout stereo2: trackers, stereo
- * matching, the pose EKF) -> poses, scored against the ground truth frame by frame:
+ * conventions) -> the core's image pipeline (rp_pipe.h; layout stereo2 by default: trackers,
+ * stereo matching, the pose EKF; or the two cameras as single cameras: gc, rc, cam1, cam2)
+ * -> poses of the left camera, scored against the ground truth frame by frame:
  * translation error |d_est - d_true| (m) and rotation error (angle of R_est^T R_true), no
  * alignment beyond the shared start (frame 0 is the world in both). The summary gives the
  * absolute trajectory error (ATE: RMSE of the translation errors over the frames) in metres
@@ -13,7 +14,7 @@
  * single settings. Every setting that differs from the core's default is printed on stderr.
  * The only per-dataset inputs are the calibration and the frame times.
  *
- * usage: rigpose-realdata (--kitti DIR | --euroc DIR) [--config FILE] [--frames N] [--first K]
+ * usage: rigpose-realdata (--kitti DIR | --euroc DIR) [--layout L] [--config FILE] [--frames N] [--first K]
  *            [--name NAME] [--quiet] [--json-out FILE] [--tracks-out FILE] [--check-ate-m X]
  *            [--check-ate-percent X]
  *            [--replay-out DIR [--copy-images]] [--no-run] [settings, see --help]
@@ -49,16 +50,19 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/* The pipeline's settings: the core's defaults for stereo2 (rp_pipe_default_cfg), or the
+/* The pipeline's settings: the core's defaults for the layout (rp_pipe_default_cfg), or the
  * estimator and tracker sections of a rigpose configuration file (config/README.md, read by the
- * daemon's parser rp_config_load, which starts from the same defaults). The file's cameras,
- * source and lcm sections are not used: the rig is the dataset's calibration. In both the
- * pair is the dataset's numbering, camera 0 left, camera 1 right. */
-bool base_cfg(const std::string &config, rp_pipe_cfg_t *cfg, std::string *err)
+ * daemon's parser rp_config_load, which starts from the same defaults; its method must be the
+ * layout's). The file's cameras, source and lcm sections are not used: the rig is the dataset's
+ * calibration, camera 0 the left (the reference), camera 1 the right. The layout's cameras:
+ * stereo2 the pair (0, 1); gc and rc both cameras as single cameras (no stereo matching);
+ * cam1 / cam2 camera 0 / 1 alone (the pose still that of camera 0, through the extrinsics). */
+bool base_cfg(const std::string &config, rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg,
+              std::string *err)
 {
     if (config.empty()) {
-        if (rp_pipe_default_cfg(RP_PIPE_STEREO2, cfg) != RP_OK) {
-            *err = "rp_pipe_default_cfg(stereo2) failed";
+        if (rp_pipe_default_cfg(layout, cfg) != RP_OK) {
+            *err = std::string("rp_pipe_default_cfg(") + rp_pipe_layout_name(layout) + ") failed";
             return false;
         }
     } else {
@@ -68,9 +72,9 @@ bool base_cfg(const std::string &config, rp_pipe_cfg_t *cfg, std::string *err)
             *err = msg;
             return false;
         }
-        if (file.pipe.layout != RP_PIPE_STEREO2) {
+        if (file.pipe.layout != layout) {
             *err = config + ": estimator.method is " + rp_pipe_layout_name(file.pipe.layout) +
-                   "; rigpose-realdata runs stereo2 (one pair)";
+                   "; this run is " + rp_pipe_layout_name(layout) + " (--layout)";
             return false;
         }
         *cfg = file.pipe;
@@ -78,6 +82,13 @@ bool base_cfg(const std::string &config, rp_pipe_cfg_t *cfg, std::string *err)
     cfg->stereo.n_pairs = 1;
     cfg->stereo.pair_a[0] = 0;
     cfg->stereo.pair_b[0] = 1;
+    cfg->gc.n_cams = 2;
+    std::memset(cfg->gc.cams, 0, sizeof cfg->gc.cams);
+    cfg->gc.cams[1] = 1;
+    cfg->rc_n = 2;
+    std::memset(cfg->rc_cams, 0, sizeof cfg->rc_cams);
+    cfg->rc_cams[1] = 1;
+    cfg->mono.cam = layout == RP_PIPE_CAM2 ? 1 : 0;
     return true;
 }
 
@@ -90,15 +101,21 @@ bool apply_override(const std::string &opt, const char *v, rp_pipe_cfg_t *cfg,
     double d1 = 0, d2 = 0;
     const double x = std::atof(v);
     const int i = std::atoi(v);
-    if (opt == "--q-trans") {
-        cfg->stereo.ekf.q_trans = (rp_real)x;
+    if (opt == "--q-trans") { /* every estimator's, as the file's key */
+        cfg->stereo.ekf.q_trans = cfg->gc.ekf.q_trans = cfg->mono.ekf.q_trans = (rp_real)x;
         fields->push_back("stereo.ekf.q_trans");
-    } else if (opt == "--q-rot") {
-        cfg->stereo.ekf.q_rot = (rp_real)x;
+        fields->push_back("gc.ekf.q_trans");
+        fields->push_back("mono.ekf.q_trans");
+    } else if (opt == "--q-rot") { /* every estimator's, as the file's key */
+        cfg->stereo.ekf.q_rot = cfg->gc.ekf.q_rot = cfg->mono.ekf.q_rot = (rp_real)x;
         fields->push_back("stereo.ekf.q_rot");
-    } else if (opt == "--sigma-px") {
-        cfg->stereo.ekf.sigma_px = (rp_real)x;
+        fields->push_back("gc.ekf.q_rot");
+        fields->push_back("mono.ekf.q_rot");
+    } else if (opt == "--sigma-px") { /* every estimator's, as the file's key */
+        cfg->stereo.ekf.sigma_px = cfg->gc.ekf.sigma_px = cfg->mono.ekf.sigma_px = (rp_real)x;
         fields->push_back("stereo.ekf.sigma_px");
+        fields->push_back("gc.ekf.sigma_px");
+        fields->push_back("mono.ekf.sigma_px");
     } else if (opt == "--features") {
         cfg->track.target = (uint16_t)i;
         cfg->track.topup_below = (uint16_t)(i * 4 / 5);
@@ -119,12 +136,16 @@ bool apply_override(const std::string &opt, const char *v, rp_pipe_cfg_t *cfg,
     } else if (opt == "--refine") {
         cfg->stereo.refine_structure = (uint8_t)i;
         fields->push_back("stereo.refine_structure");
-    } else if (opt == "--iterations") {
-        cfg->stereo.ekf.iterations = (uint8_t)i;
+    } else if (opt == "--iterations") { /* every estimator's, as the file's key */
+        cfg->stereo.ekf.iterations = cfg->gc.ekf.iterations = cfg->mono.ekf.iterations = (uint8_t)i;
         fields->push_back("stereo.ekf.iterations");
-    } else if (opt == "--gate") {
-        cfg->stereo.ekf.gate_chi2 = (rp_real)x;
+        fields->push_back("gc.ekf.iterations");
+        fields->push_back("mono.ekf.iterations");
+    } else if (opt == "--gate") { /* every estimator's, as the file's key */
+        cfg->stereo.ekf.gate_chi2 = cfg->gc.ekf.gate_chi2 = cfg->mono.ekf.gate_chi2 = (rp_real)x;
         fields->push_back("stereo.ekf.gate_chi2");
+        fields->push_back("gc.ekf.gate_chi2");
+        fields->push_back("mono.ekf.gate_chi2");
     } else if (opt == "--match-subpix") {
         cfg->smatch.subpix_iter = (uint8_t)i;
         fields->push_back("smatch.subpix_iter");
@@ -275,7 +296,13 @@ bool write_replay(const std::string &out, const rprd::Sequence &seq, const rp_pi
         (void)rp_pipe_default_cfg(RP_PIPE_STEREO2, &d);
         const rp_vo_stereo_cfg_t &e = cfg.stereo, &de = d.stereo;
         const rp_track_cfg_t &t = cfg.track, &dt = d.track;
-        std::fprintf(fy, "\nestimator:\n  method: stereo2\n  pairs: [[left, right]]\n");
+        const rp_pipe_layout_t l = cfg.layout;
+        std::fprintf(fy, "\nestimator:\n  method: %s\n  %s\n", rp_pipe_layout_name(l),
+                     l == RP_PIPE_STEREO2                        ? "pairs: [[left, right]]"
+                     : l == RP_PIPE_GC || l == RP_PIPE_RC        ? "cams: [left, right]"
+                     : l == RP_PIPE_CAM2                         ? "cams: [right]"
+                                                                 : "cams: [left]");
+
 #define RD_KEY(cond, ...) if (cond) { std::fprintf(fy, __VA_ARGS__); }
         RD_KEY(e.ekf.sigma_px != de.ekf.sigma_px, "  sigma_px: %g\n", (double)e.ekf.sigma_px)
         RD_KEY(e.ekf.q_trans != de.ekf.q_trans, "  q_trans: %g\n", (double)e.ekf.q_trans)
@@ -429,6 +456,11 @@ void usage(FILE *f)
         "  --images L,R         KITTI: the left and right image folders under DIR\n"
         "  --fps HZ             KITTI: frame j at j / HZ s (times.txt not read; for folders\n"
         "                       without it)\n"
+        "  --layout L           stereo2 (default: the pair, stereo matching), gc, rc (both\n"
+        "                       cameras as single cameras of a non-overlapping rig, no\n"
+        "                       matching), cam1 / cam2 (the left / right camera alone); the\n"
+        "                       pose is the left camera's in every layout\n"
+        "  --trace-scale        gc: per frame, the metric scale's state (rp_vo_gc.h step 6)\n"
         "  --frames N           N frames (default: all)\n"
         "  --first K            start at frame K (frames, not file lines: EuRoC counts the\n"
         "                       timestamps both cameras list; its left camera is the world)\n"
@@ -462,7 +494,7 @@ void usage(FILE *f)
         "                       frame K followed by the truth's own steps (what an estimator\n"
         "                       exact from frame K on but true to the images before scores)\n"
         "  --config FILE        the estimator and tracker settings of a rigpose configuration\n"
-        "                       file (config/README.md; method stereo2; its cameras, source\n"
+        "                       file (config/README.md; its method the run's --layout; its cameras, source\n"
         "                       and lcm are not used: the rig is the dataset's calibration).\n"
         "                       Without it: the core's defaults (rp_pipe_default_cfg). The\n"
         "                       settings that differ from the defaults are printed on stderr.\n"
@@ -478,11 +510,12 @@ void usage(FILE *f)
 int main(int argc, char **argv)
 {
     std::string kitti, euroc, name, json_out, replay_out, config, mirror_out, tracks_out;
+    rp_pipe_layout_t layout = RP_PIPE_STEREO2;
     bool mirror = false;
     size_t frames = 0, first = 0;
     rprd::LoadOpts lo;
     bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
-    bool direct_ref = false, steps = false;
+    bool direct_ref = false, steps = false, trace_scale = false;
     size_t splice = 0;
     rprd::DirectOpts dopts;
     double check_m = -1.0, check_pct = -1.0;
@@ -507,6 +540,8 @@ int main(int argc, char **argv)
             mirror = true;
         } else if (a == "--steps") {
             steps = true;
+        } else if (a == "--trace-scale") {
+            trace_scale = true;
         } else if (!has_val) {
             std::fprintf(stderr, "rigpose-realdata: %s: unknown option or missing value\n",
                          a.c_str());
@@ -516,6 +551,14 @@ int main(int argc, char **argv)
             kitti = argv[++i];
         } else if (a == "--euroc") {
             euroc = argv[++i];
+        } else if (a == "--layout") {
+            if (rp_pipe_layout_from_name(argv[++i], &layout) != RP_OK ||
+                !(layout == RP_PIPE_STEREO2 || layout == RP_PIPE_GC || layout == RP_PIPE_CAM1 ||
+                  layout == RP_PIPE_CAM2 || layout == RP_PIPE_RC)) {
+                std::fprintf(stderr, "rigpose-realdata: --layout stereo2 | gc | cam1 | cam2 | rc "
+                                     "(a rig of two cameras)\n");
+                return 2;
+            }
         } else if (a == "--frames") {
             frames = (size_t)std::strtoul(argv[++i], nullptr, 10);
         } else if (a == "--first") {
@@ -633,10 +676,13 @@ int main(int argc, char **argv)
         seq = m;
         first = 0;
     }
+    const bool stereo = layout == RP_PIPE_STEREO2;
     seq.name = !name.empty() ? name
-                             : std::string(is_kitti ? "kitti00" : "euroc_mh01") + (mirror ? "_mirror" : "");
+                             : std::string(is_kitti ? "kitti00" : "euroc_mh01") +
+                                   (stereo ? "" : std::string("_") + rp_pipe_layout_name(layout)) +
+                                   (mirror ? "_mirror" : "");
     static rp_pipe_cfg_t cfg;
-    if (!base_cfg(config, &cfg, &err)) {
+    if (!base_cfg(config, layout, &cfg, &err)) {
         std::fprintf(stderr, "rigpose-realdata: %s\n", err.c_str());
         return 2;
     }
@@ -651,8 +697,11 @@ int main(int argc, char **argv)
     /* what differs from the core's defaults, one line each on stderr: the rig's numbering, the
      * settings of the command line, those of the configuration file */
     const std::string why_file = config.empty() ? "" : "config " + config;
-    const char *table[48][2] = {{"stereo.pair_", "the dataset's numbering: 0 left, 1 right"}};
-    size_t nt = 1;
+    const char *const numbering = "the dataset's numbering: 0 left, 1 right";
+    const char *table[48][2] = {{"stereo.pair_", numbering}, {"gc.n_cams", numbering},
+                                {"gc.cams", numbering},      {"rc_", numbering},
+                                {"mono.cam", numbering}};
+    size_t nt = 5;
     for (size_t k = 0; k < cli_fields.size() && nt < 46; ++k, ++nt) {
         table[nt][0] = cli_fields[k];
         table[nt][1] = "command line";
@@ -706,7 +755,7 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-    size_t lost = 0, reinit = 0;
+    size_t lost = 0, reinit = 0, weak = 0;
     for (size_t j = 0; j < seq.utime.size(); ++j) {
         cv::Mat im[2];
         rp_image_t v[2];
@@ -732,6 +781,7 @@ int main(int argc, char **argv)
             std::fprintf(stderr, "rigpose-realdata: first frame: %s\n", rp_status_str(st));
         }
         lost += (est.flags & RP_EST_LOST) ? 1u : 0u;
+        weak += (est.flags & RP_EST_SCALE_WEAK) ? 1u : 0u;
         reinit += (est.flags & RP_EST_REINIT) ? 1u : 0u;
         const rprd::FrameErr e = rprd::frame_error(p, seq.truth[j]);
         est_pose.push_back(rprd::pose_from_vec(p));
@@ -744,6 +794,17 @@ int main(int argc, char **argv)
                 std::fprintf(stderr, "rigpose-realdata: %s: %s\n", tracks_out.c_str(), err.c_str());
                 return 1;
             }
+        }
+        if (trace_scale && layout == RP_PIPE_GC) {
+            /* gc's step 6 (rp_vo_gc.h): the map's unit and the last window adjustment */
+            const rp_vo_gc_t &g = pipe.est.gc;
+            const rp_gcba_result_t &r = g.ba_last;
+            std::printf("scale %zu: mu %.4f +- %.4f, fused %u refused %u; last window mu %.4f +- "
+                        "%.4f, %u landmarks %u obs %u keyframes, rms %.3f -> %.3f px\n",
+                        j, (double)g.mu, std::sqrt((double)g.mu_var), (unsigned)g.n_ba,
+                        (unsigned)g.n_ba_rejected, (double)r.mu, std::sqrt((double)r.mu_var),
+                        (unsigned)r.n_lm, (unsigned)r.n_obs, (unsigned)r.n_kf,
+                        (double)r.rms0_px, (double)r.rms_px);
         }
         if (!quiet) {
             std::printf("%5zu %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %8.4f %7.3f %4u %4u %4u %s%s%s\n",
@@ -760,7 +821,8 @@ int main(int argc, char **argv)
     }
     const rprd::Summary s = rprd::summarise(est_pose, seq.truth);
     const double ms = 1e3 * step_s / (double)s.frames;
-    std::printf("\n%s, %zu frames, stereo2 through rp_pipe (%s):\n", seq.name.c_str(), s.frames,
+    std::printf("\n%s, %zu frames, %s through rp_pipe (%s):\n", seq.name.c_str(), s.frames,
+                rp_pipe_layout_name(layout),
                 is_kitti ? "KITTI rectified pair" : "EuRoC cam0/cam1, distorted");
     std::printf("| figure | value |\n|---|---|\n");
     std::printf("| true path length | %.3f m |\n", s.path_m);
@@ -770,6 +832,26 @@ int main(int argc, char **argv)
     std::printf("| rotation error (RMSE) | %.3f deg |\n", s.rot_rmse_deg);
     std::printf("| frame-to-frame drift (RPE / path) | %.3f %% |\n", s.rpe_percent);
     std::printf("| scale of the positions (est / true, least squares) | %.4f |\n", s.scale);
+    /* the same trajectory with its positions divided by that scale: what is left when the
+     * scale is set aside (a layout without metric scale: cam1, cam2, rc's fallback) */
+    std::vector<rprd::Pose> unscaled = est_pose;
+    for (rprd::Pose &T : unscaled) {
+        for (double &t : T.t) {
+            t = s.scale > 0.0 ? t / s.scale : t;
+        }
+    }
+    const rprd::Summary su = rprd::summarise(unscaled, seq.truth);
+    std::printf("| ATE with the positions divided by that scale | %.4f m (%.3f %%) |\n", su.ate_m,
+                su.ate_percent);
+    std::printf("| frames flagged scaleweak (metric scale poorly determined) | %zu of %zu |\n",
+                weak, s.frames);
+    if (layout == RP_PIPE_GC) {
+        const rp_vo_gc_t &g = pipe.est.gc;
+        std::printf("| gc metric scale (step 6): map units per metre, adjustments fused / refused "
+                    "| %.4f +- %.4f, %u / %u |\n",
+                    (double)g.mu, std::sqrt((double)g.mu_var), (unsigned)g.n_ba,
+                    (unsigned)g.n_ba_rejected);
+    }
     std::printf("| frames lost / re-initialised | %zu / %zu |\n", lost, reinit);
     std::printf("| pipeline time per frame set | %.2f ms |\n", ms);
     rprd::Summary ref, dref, spliced;
@@ -846,9 +928,11 @@ int main(int argc, char **argv)
         std::fprintf(f,
                      "{\"%s_ate_m\": %.6f, \"%s_ate_percent\": %.6f, \"%s_path_m\": %.4f, "
                      "\"%s_max_err_m\": %.6f, \"%s_rot_rmse_deg\": %.5f, \"%s_rpe_percent\": %.5f, \"%s_frames\": %zu, "
-                     "\"%s_frames_lost\": %zu, \"%s_ms_per_frame\": %.3f, \"%s_scale\": %.5f",
+                     "\"%s_frames_lost\": %zu, \"%s_ms_per_frame\": %.3f, \"%s_scale\": %.5f, "
+                     "\"%s_unscaled_ate_m\": %.6f, \"%s_scale_weak_share\": %.4f",
                      n, s.ate_m, n, s.ate_percent, n, s.path_m, n, s.max_m, n, s.rot_rmse_deg, n, s.rpe_percent, n,
-                     s.frames, n, lost, n, ms, n, s.scale);
+                     s.frames, n, lost, n, ms, n, s.scale, n, su.ate_m, n,
+                     s.frames ? (double)weak / (double)s.frames : 0.0);
         if (ref.frames) {
             std::fprintf(f,
                          ", \"%s_opencv_ref_ate_percent\": %.6f, \"%s_opencv_ref_rpe_percent\": "

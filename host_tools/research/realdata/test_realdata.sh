@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# test_realdata.sh - rigpose's stereo layout on short pieces of the real sequences (run by
+# test_realdata.sh - rigpose's layouts on short pieces of the real sequences (run by
 # `make test`): 20 frames of each with the core's default settings (no configuration file, no
 # per-dataset profile), the ATE within the data README's targets (KITTI 00: 1 % of the path;
 # EuRoC MH01: 0.03 m); and --config FILE (the daemon's parser) on a profile file. The data is ../shared/data beside the repository, or
@@ -39,9 +39,25 @@ else fail=$((fail + 1)); echo "[  FAILED  ] config_file_settings: $msg"; fi
 bad=$(mktemp /tmp/rp_realdata_cfg_XXXXXX.yaml)
 sed 's/method: stereo2/method: gc/; s/  pairs: .*/  cams: [left, right]/' "$prof" > "$bad"
 "$bin" --kitti "$kitti" --frames 2 --no-run --config "$bad" >/dev/null 2>"$bad.err"; rc=$?
-if [ $rc -eq 2 ] && grep -q "runs stereo2" "$bad.err"; then
+if [ $rc -eq 2 ] && grep -q "this run is stereo2" "$bad.err"; then
   pass=$((pass + 1)); echo "[       OK ] config_file_other_method_refused"
 else fail=$((fail + 1)); echo "[  FAILED  ] config_file_other_method_refused: rc $rc $(cat "$bad.err")"; fi
+# ... and taken with the layout it names
+if "$bin" --kitti "$kitti" --frames 2 --no-run --layout gc --config "$bad" >/dev/null 2>&1; then
+  pass=$((pass + 1)); echo "[       OK ] config_file_gc_with_layout_gc"
+else fail=$((fail + 1)); echo "[  FAILED  ] config_file_gc_with_layout_gc"; fi
 rm -f "$bad" "$bad.err"
+# The non-overlapping layout on the pair's two cameras (no stereo matching): straight driving
+# moves both cameras alike, so their offset does not tell the metric scale, and gc must say so
+# (RP_EST_SCALE_WEAK) on every frame it tracks (issue 16).
+json=$(mktemp /tmp/rp_realdata_gc_XXXXXX.json)
+if "$bin" --kitti "$kitti" --first 50 --frames 20 --layout gc --quiet --name gc \
+     --json-out "$json" >/dev/null 2>&1 &&
+   python3 -c 'import json, sys; d = json.load(open(sys.argv[1]))
+lost = d["gc_frames_lost"] / d["gc_frames"]
+sys.exit(0 if d["gc_scale_weak_share"] >= 1.0 - lost - 1e-9 else 1)' "$json"; then
+  pass=$((pass + 1)); echo "[       OK ] kitti00_50_69_gc_straight_scale_weak"
+else fail=$((fail + 1)); echo "[  FAILED  ] kitti00_50_69_gc_straight_scale_weak: $(cat "$json")"; fi
+rm -f "$json"
 echo "[  PASSED  ] $pass test(s)."
 if [ $fail -ne 0 ]; then echo "[  FAILED  ] $fail test(s)."; exit 1; fi
