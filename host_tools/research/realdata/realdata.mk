@@ -43,7 +43,8 @@ $(RD_CONFIG_O): platform/src/rp_config.c platform/include/rigpose/rp_config.h $(
 	$(CC) $(CSTD) $(CORE_WARN) -Wno-format-truncation -D_DEFAULT_SOURCE -Iplatform/include $(INC) \
 	    -O2 -g -DNDEBUG $(RD_DEFS) -c $< -o $@
 RD_LIB_SRC := host_tools/research/realdata/rp_realdata.cpp host_tools/research/realdata/rp_direct.cpp \
-    host_tools/research/realdata/rp_mirror.cpp host_tools/research/realdata/rp_rectify.cpp
+    host_tools/research/realdata/rp_mirror.cpp host_tools/research/realdata/rp_rectify.cpp \
+    host_tools/research/realdata/rp_timesync.cpp
 # --tracks-out: the tracks file of rigpose-ba (host_tools/ba/rp_tracks.hpp), compiled with this
 # core's limits.
 RD_SRC := host_tools/research/realdata/rigpose_realdata.cpp $(RD_LIB_SRC) host_tools/ba/rp_tracks.cpp

@@ -42,6 +42,7 @@
 #include "rp_mirror.hpp"
 #include "rp_rectify.hpp"
 #include "rp_realdata.hpp"
+#include "rp_timesync.hpp"
 #include "../../common/rp_cfg_diff.h"
 #include "../../common/rp_cv.hpp"
 #include "../../ba/rp_tracks.hpp"
@@ -116,6 +117,30 @@ bool apply_override(const std::string &opt, const char *v, rp_pipe_cfg_t *cfg,
         fields->push_back("stereo.ekf.sigma_px");
         fields->push_back("gc.ekf.sigma_px");
         fields->push_back("mono.ekf.sigma_px");
+    } else if (opt == "--estimate-offsets") { /* every estimator's, as the file's key */
+        if (i != 0 && i != 1) {
+            return false;
+        }
+        cfg->stereo.ekf.toff_estimate = cfg->gc.ekf.toff_estimate = cfg->mono.ekf.toff_estimate =
+            (uint8_t)i;
+        fields->push_back("stereo.ekf.toff_estimate");
+        fields->push_back("gc.ekf.toff_estimate");
+        fields->push_back("mono.ekf.toff_estimate");
+    } else if (opt == "--offset-sigma") { /* every estimator's, as the file's key */
+        cfg->stereo.ekf.toff_sigma_s = cfg->gc.ekf.toff_sigma_s = cfg->mono.ekf.toff_sigma_s =
+            (rp_real)x;
+        fields->push_back("stereo.ekf.toff_sigma_s");
+        fields->push_back("gc.ekf.toff_sigma_s");
+        fields->push_back("mono.ekf.toff_sigma_s");
+    } else if (opt == "--offset-ms") { /* the right camera's configured clock offset */
+        cfg->stereo.ekf.toff0_s[1] = cfg->gc.ekf.toff0_s[1] = cfg->mono.ekf.toff0_s[1] =
+            (rp_real)(1e-3 * x);
+        fields->push_back("stereo.ekf.toff0_s");
+        fields->push_back("gc.ekf.toff0_s");
+        fields->push_back("mono.ekf.toff0_s");
+    } else if (opt == "--max-pair-skew") {
+        cfg->stereo.max_pair_skew_s = (rp_real)x;
+        fields->push_back("stereo.max_pair_skew_s");
     } else if (opt == "--features") {
         cfg->track.target = (uint16_t)i;
         cfg->track.topup_below = (uint16_t)(i * 4 / 5);
@@ -461,6 +486,12 @@ void usage(FILE *f)
         "                       matching), cam1 / cam2 (the left / right camera alone); the\n"
         "                       pose is the left camera's in every layout\n"
         "  --trace-scale        gc: per frame, the metric scale's state (rp_vo_gc.h step 6)\n"
+        "  --sync-rotation      before the run, estimate the right camera's clock offset from\n"
+        "                       the two cameras' rotation rates (rp_timesync.hpp) and start\n"
+        "                       the estimator from it (cameras[1].time_offset_s)\n"
+        "  --pair-shift K       pair the right camera's image j + K with the left's j, stamped\n"
+        "                       as simultaneous (a right camera K frames late: the\n"
+        "                       clock-offset experiment; --estimate-offsets 1 to estimate it)\n"
         "  --frames N           N frames (default: all)\n"
         "  --first K            start at frame K (frames, not file lines: EuRoC counts the\n"
         "                       timestamps both cameras list; its left camera is the world)\n"
@@ -502,7 +533,9 @@ void usage(FILE *f)
         "settings (over the defaults or FILE): --q-trans Q --q-rot Q --sigma-px S --features N --levels L --win W\n"
         "  --min-dist D --grid X,Y --max-depth M --match-depth MIN,MAX --match-win H\n"
         "  --match-zncc Z --match-subpix N --fb-max PX --min-tracked N --refine 0|1\n"
-        "  --iterations N --gate CHI2\n");
+        "  --iterations N --gate CHI2 --estimate-offsets 0|1 --offset-sigma S\n"
+        "  --offset-ms MS (the right camera's clock offset: capture = stamp + MS)\n"
+        "  --max-pair-skew S\n");
 }
 
 }  // namespace
@@ -515,8 +548,8 @@ int main(int argc, char **argv)
     size_t frames = 0, first = 0;
     rprd::LoadOpts lo;
     bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
-    bool direct_ref = false, steps = false, trace_scale = false;
-    size_t splice = 0;
+    bool direct_ref = false, steps = false, trace_scale = false, sync_rotation = false;
+    size_t splice = 0, pair_shift = 0;
     rprd::DirectOpts dopts;
     double check_m = -1.0, check_pct = -1.0;
     std::vector<std::pair<std::string, std::string>> over;
@@ -542,6 +575,8 @@ int main(int argc, char **argv)
             steps = true;
         } else if (a == "--trace-scale") {
             trace_scale = true;
+        } else if (a == "--sync-rotation") {
+            sync_rotation = true;
         } else if (!has_val) {
             std::fprintf(stderr, "rigpose-realdata: %s: unknown option or missing value\n",
                          a.c_str());
@@ -599,6 +634,8 @@ int main(int argc, char **argv)
                 std::fprintf(stderr, "rigpose-realdata: --direct-rows A,B with 0 <= A < B\n");
                 return 2;
             }
+        } else if (a == "--pair-shift") {
+            pair_shift = (size_t)std::strtoul(argv[++i], nullptr, 10);
         } else if (a == "--splice") {
             splice = (size_t)std::strtoul(argv[++i], nullptr, 10);
         } else if (a == "--check-ate-m") {
@@ -629,6 +666,29 @@ int main(int argc, char **argv)
     }
     for (const std::string &n : seq.notes) {
         std::printf("read %s\n", n.c_str());
+    }
+    /* --pair-shift K: the right camera's image j + K with the left's j, stamped with the left's
+     * time: a right camera whose clock runs t(j + K) - t(j) behind (capture = stamp + offset,
+     * the offset positive), the experiment of the unsynchronised-cameras issue */
+    double true_offset_s = 0.0;
+    if (pair_shift > 0) {
+        const size_t n = seq.utime.size();
+        if (pair_shift >= n || n - pair_shift < 2) {
+            std::fprintf(stderr, "rigpose-realdata: --pair-shift %zu: the clip has %zu frames\n",
+                         pair_shift, n);
+            return 2;
+        }
+        true_offset_s = 1e-6 * (double)(seq.utime[pair_shift] - seq.utime[0]);
+        for (size_t j = 0; j + pair_shift < n; ++j) {
+            seq.img[1][j] = seq.img[1][j + pair_shift];
+        }
+        seq.img[0].resize(n - pair_shift);
+        seq.img[1].resize(n - pair_shift);
+        seq.utime.resize(n - pair_shift);
+        seq.truth.resize(n - pair_shift);
+        std::printf("pair shift %zu: the right camera's image j + %zu with the left's j, stamped as "
+                    "simultaneous (true offset of the right camera %.1f ms at the start)\n",
+                    pair_shift, pair_shift, 1e3 * true_offset_s);
     }
     /* --mirror: write the clip's mirror image (rp_mirror.hpp) and run on that instead */
     /* a temporary folder under $TMPDIR (or /tmp), removed at exit */
@@ -693,6 +753,35 @@ int main(int argc, char **argv)
                          o.first.c_str(), o.second.c_str());
             return 2;
         }
+    }
+    double sync_offset_s = 0.0, sync_sigma_s = 0.0;
+    if (sync_rotation) {
+        std::vector<rprd::RateSample> w0, w1;
+        rprd::OffsetFit fit;
+        if (!rprd::camera_rates(seq.img[0], seq.utime, seq.rig.cam[0], &w0, &err) ||
+            !rprd::camera_rates(seq.img[1], seq.utime, seq.rig.cam[1], &w1, &err) ||
+            !rprd::fit_offset(w0, w1, 0.2, 0.001, &fit)) {
+            std::fprintf(stderr, "rigpose-realdata: --sync-rotation: %s\n",
+                         err.empty() ? "the rates do not overlap" : err.c_str());
+            return 1;
+        }
+        std::printf("clock offset of the right camera from the rotation rates: %.2f +- %.2f ms "
+                    "(%zu of %zu / %zu intervals; rms rate difference %.4f rad/s at lag 0, "
+                    "%.4f at the fit; the rate varies %.1f times that)\n",
+                    1e3 * fit.offset_s, 1e3 * fit.sigma_s, fit.n, w0.size(), w1.size(),
+                    fit.rms_zero, fit.rms_fit, fit.snr);
+        if (!std::isfinite(fit.sigma_s)) {
+            std::fprintf(stderr, "rigpose-realdata: --sync-rotation: the clip's rotation rate "
+                                 "hardly varies: no offset can be told\n");
+            return 1;
+        }
+        sync_offset_s = fit.offset_s;
+        sync_sigma_s = fit.sigma_s;
+        cfg.stereo.ekf.toff0_s[1] = cfg.gc.ekf.toff0_s[1] = cfg.mono.ekf.toff0_s[1] =
+            (rp_real)fit.offset_s;
+        cli_fields.push_back("stereo.ekf.toff0_s");
+        cli_fields.push_back("gc.ekf.toff0_s");
+        cli_fields.push_back("mono.ekf.toff0_s");
     }
     /* what differs from the core's defaults, one line each on stderr: the rig's numbering, the
      * settings of the command line, those of the configuration file */
@@ -845,6 +934,16 @@ int main(int argc, char **argv)
                 su.ate_percent);
     std::printf("| frames flagged scaleweak (metric scale poorly determined) | %zu of %zu |\n",
                 weak, s.frames);
+    rp_real off_s[RP_MAX_CAMS], off_sd[RP_MAX_CAMS];
+    if (rp_pipe_time_offsets(&pipe, off_s, off_sd) == RP_OK) {
+        std::printf("| right camera's clock offset (capture = stamp + it), estimated | %.2f +- %.2f "
+                    "ms%s |\n",
+                    1e3 * (double)off_s[1], 1e3 * (double)off_sd[1],
+                    off_sd[1] > 0 ? "" : " (not estimated: the configured value)");
+        if (pair_shift > 0) {
+            std::printf("| its true value (--pair-shift) | %.2f ms |\n", 1e3 * true_offset_s);
+        }
+    }
     if (layout == RP_PIPE_GC) {
         const rp_vo_gc_t &g = pipe.est.gc;
         std::printf("| gc metric scale (step 6): map units per metre, adjustments fused / refused "
@@ -933,6 +1032,17 @@ int main(int argc, char **argv)
                      n, s.ate_m, n, s.ate_percent, n, s.path_m, n, s.max_m, n, s.rot_rmse_deg, n, s.rpe_percent, n,
                      s.frames, n, lost, n, ms, n, s.scale, n, su.ate_m, n,
                      s.frames ? (double)weak / (double)s.frames : 0.0);
+        if (rp_pipe_time_offsets(&pipe, off_s, off_sd) == RP_OK) {
+            std::fprintf(f, ", \"%s_offset_cam2_ms\": %.4f, \"%s_offset_cam2_sigma_ms\": %.4f", n,
+                         1e3 * (double)off_s[1], n, 1e3 * (double)off_sd[1]);
+        }
+        if (sync_rotation) {
+            std::fprintf(f, ", \"%s_sync_rotation_ms\": %.4f, \"%s_sync_rotation_sigma_ms\": %.4f",
+                         n, 1e3 * sync_offset_s, n, 1e3 * sync_sigma_s);
+        }
+        if (pair_shift > 0) {
+            std::fprintf(f, ", \"%s_true_offset_cam2_ms\": %.4f", n, 1e3 * true_offset_s);
+        }
         if (ref.frames) {
             std::fprintf(f,
                          ", \"%s_opencv_ref_ate_percent\": %.6f, \"%s_opencv_ref_rpe_percent\": "
