@@ -3,7 +3,8 @@
 
 Reads the latest rigpose.status_t (cam_offset_ms, cam_offset_sigma_ms: docs/time.md) of a
 recorded LCM log (--lcm-log FILE: the daemon's file:// URL, lcm-logger) or of a running daemon
-(--lcm-url URL, default LCM's; waits at most --timeout s for one), prints one line per camera
+(--lcm-url URL, default LCM's; waits at most --timeout s for one), or the offsets
+rigpose-timesync found from the rig's rotation (--timesync-json FILE), prints one line per camera
 and, with --write CONFIG, sets each estimated camera's `time_offset_s` in the configuration file
 (cameras[i], in order; a camera whose offset is not estimated, sigma 0, is left as it is unless
 --all). The file is edited line by line, comments and layout kept: an existing `time_offset_s:`
@@ -106,11 +107,20 @@ def main():
     src = ap.add_mutually_exclusive_group()
     src.add_argument("--lcm-log", metavar="FILE", help="a recorded LCM log")
     src.add_argument("--lcm-url", metavar="URL", help="a running daemon's LCM URL")
+    src.add_argument("--timesync-json", metavar="FILE",
+                     help="the offsets rigpose-timesync found (its --json-out)")
     ap.add_argument("--channel", default="RIGPOSE_STATUS", help="status channel (RIGPOSE_STATUS)")
     ap.add_argument("--timeout", type=float, default=5.0, help="live: seconds to wait (5)")
     ap.add_argument("--write", metavar="CONFIG", help="set cameras[i].time_offset_s in CONFIG")
     ap.add_argument("--all", action="store_true", help="also the cameras not estimated")
     a = ap.parse_args()
+    if a.timesync_json:
+        try:
+            offsets = from_timesync(a.timesync_json, a.all)
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            print("rigpose-offsets: %s: %s" % (a.timesync_json, e), file=sys.stderr)
+            return 1
+        return write_offsets(a.write, offsets)
     try:
         m = (latest_from_log(a.lcm_log, a.channel) if a.lcm_log
              else first_live(a.lcm_url, a.channel, a.timeout))
@@ -128,22 +138,46 @@ def main():
             else "- (not estimated)"))
         if est or a.all:
             offsets[k] = m.cam_offset_ms[k] * 1e-3
-    if a.write:
-        if not offsets:
-            print("rigpose-offsets: no estimated offset to write (--all writes them all)",
-                  file=sys.stderr)
-            return 1
-        try:
-            with open(a.write) as f:
-                text = f.read()
-            new = set_offsets(text, offsets)
-            with open(a.write, "w") as f:
-                f.write(new)
-        except OSError as e:
-            print("rigpose-offsets: %s" % e, file=sys.stderr)
-            return 1
-        print("rigpose-offsets: %s: time_offset_s of camera%s %s" % (
-            a.write, "s" if len(offsets) > 1 else "", ", ".join(str(k) for k in sorted(offsets))))
+    return write_offsets(a.write, offsets)
+
+
+def from_timesync(path, all_cams):
+    """{camera index: offset s} from rigpose-timesync's JSON; the first camera (the reference,
+    its configured offset) only with all_cams; a camera it could not tell (null) never."""
+    import json
+    with open(path) as f:
+        d = json.load(f)
+    offsets = {}
+    for k, (name, off, sd) in enumerate(zip(d["cameras"], d["time_offset_s"], d["sigma_s"])):
+        if off is None:
+            print("camera %d (%s): not found by rigpose-timesync, left as it is" % (k, name))
+            continue
+        print("camera %d (%s): offset %+.3f ms, sigma %s" % (
+            k, name, off * 1e3, "%.3f ms" % (sd * 1e3) if k else "- (the reference)"))
+        if k or all_cams:
+            offsets[k] = float(off)
+    return offsets
+
+
+def write_offsets(path, offsets):
+    """Set cameras[k].time_offset_s = offsets[k] in the configuration file path (if given)."""
+    if not path:
+        return 0
+    if not offsets:
+        print("rigpose-offsets: no estimated offset to write (--all writes them all)",
+              file=sys.stderr)
+        return 1
+    try:
+        with open(path) as f:
+            text = f.read()
+        new = set_offsets(text, offsets)
+        with open(path, "w") as f:
+            f.write(new)
+    except OSError as e:
+        print("rigpose-offsets: %s" % e, file=sys.stderr)
+        return 1
+    print("rigpose-offsets: %s: time_offset_s of camera%s %s" % (
+        path, "s" if len(offsets) > 1 else "", ", ".join(str(k) for k in sorted(offsets))))
     return 0
 
 

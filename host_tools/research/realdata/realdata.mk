@@ -44,12 +44,12 @@ $(RD_CONFIG_O): platform/src/rp_config.c platform/include/rigpose/rp_config.h $(
 	    -O2 -g -DNDEBUG $(RD_DEFS) -c $< -o $@
 RD_LIB_SRC := host_tools/research/realdata/rp_realdata.cpp host_tools/research/realdata/rp_direct.cpp \
     host_tools/research/realdata/rp_mirror.cpp host_tools/research/realdata/rp_rectify.cpp \
-    host_tools/research/realdata/rp_timesync.cpp
+    host_tools/calib/rp_timesync.cpp
 # --tracks-out: the tracks file of rigpose-ba (host_tools/ba/rp_tracks.hpp), compiled with this
 # core's limits.
 RD_SRC := host_tools/research/realdata/rigpose_realdata.cpp $(RD_LIB_SRC) host_tools/ba/rp_tracks.cpp
 RD_HDR_CORE := $(wildcard core/include/rigpose/*.h platform/include/rigpose/*.h)
-RD_HDR := $(wildcard host_tools/research/realdata/*.hpp) host_tools/ba/rp_tracks.hpp $(RD_HDR_CORE)
+RD_HDR := $(wildcard host_tools/research/realdata/*.hpp) host_tools/ba/rp_tracks.hpp host_tools/calib/rp_timesync.hpp $(RD_HDR_CORE)
 
 $(RD_BIN): $(RD_SRC) $(RD_HDR) $(RD_CONFIG_O) $(RD_DIR)/librigpose_core.a | deps
 	mkdir -p $(REL)

@@ -42,7 +42,7 @@
 #include "rp_mirror.hpp"
 #include "rp_rectify.hpp"
 #include "rp_realdata.hpp"
-#include "rp_timesync.hpp"
+#include "../../calib/rp_timesync.hpp"
 #include "../../common/rp_cfg_diff.h"
 #include "../../common/rp_cv.hpp"
 #include "../../ba/rp_tracks.hpp"
@@ -339,7 +339,13 @@ bool write_replay(const std::string &out, const rprd::Sequence &seq, const rp_pi
         RD_KEY(e.max_depth_m != de.max_depth_m, "  max_depth_m: %g\n", (double)e.max_depth_m)
         RD_KEY(e.refine_structure != de.refine_structure, "  refine_structure: %s\n",
                e.refine_structure ? "true" : "false")
-        std::fprintf(fy, "  default_dt_s: %g\n\ntracker:\n", 1.0 / seq_fps(seq));
+        std::fprintf(fy, "  default_dt_s: %g\n", 1.0 / seq_fps(seq));
+        /* the tracker section only with a key in it (an empty one is not a mapping) */
+        if (t.target != dt.target || t.levels != dt.levels || t.win != dt.win ||
+            t.min_dist != dt.min_dist || t.fb_max_q16 != dt.fb_max_q16 ||
+            t.grid_x != dt.grid_x || t.grid_y != dt.grid_y) {
+            std::fprintf(fy, "\ntracker:\n");
+        }
         RD_KEY(t.target != dt.target, "  target: %u\n", (unsigned)t.target)
         RD_KEY(t.levels != dt.levels, "  levels: %u\n", (unsigned)t.levels)
         RD_KEY(t.win != dt.win, "  win: %u\n", (unsigned)t.win)
@@ -756,11 +762,11 @@ int main(int argc, char **argv)
     }
     double sync_offset_s = 0.0, sync_sigma_s = 0.0;
     if (sync_rotation) {
-        std::vector<rprd::RateSample> w0, w1;
-        rprd::OffsetFit fit;
-        if (!rprd::camera_rates(seq.img[0], seq.utime, seq.rig.cam[0], &w0, &err) ||
-            !rprd::camera_rates(seq.img[1], seq.utime, seq.rig.cam[1], &w1, &err) ||
-            !rprd::fit_offset(w0, w1, 0.2, 0.001, &fit)) {
+        std::vector<rpts::RateSample> w0, w1;
+        rpts::OffsetFit fit;
+        if (!rpts::camera_rates(seq.img[0], seq.utime, seq.rig.cam[0], &w0, &err) ||
+            !rpts::camera_rates(seq.img[1], seq.utime, seq.rig.cam[1], &w1, &err) ||
+            !rpts::fit_offset(w0, w1, 0.2, 0.001, &fit)) {
             std::fprintf(stderr, "rigpose-realdata: --sync-rotation: %s\n",
                          err.empty() ? "the rates do not overlap" : err.c_str());
             return 1;

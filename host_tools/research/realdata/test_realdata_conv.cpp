@@ -23,7 +23,7 @@
 #include "rp_mirror.hpp"
 #include "rp_rectify.hpp"
 #include "rp_realdata.hpp"
-#include "rp_timesync.hpp"
+#include "../../calib/rp_timesync.hpp"
 
 namespace {
 
@@ -584,9 +584,9 @@ void check_timesync_synthetic()
     std::srand(11);
     auto noise = []() { return 0.01 * (2.0 * std::rand() / RAND_MAX - 1.0); };
     for (double off : {0.037, 0.0, -0.052}) {
-        std::vector<rprd::RateSample> ref, cam, flat_ref, flat_cam;
+        std::vector<rpts::RateSample> ref, cam, flat_ref, flat_cam;
         for (int j = 0; j < 150; ++j) {
-            rprd::RateSample a, b;
+            rpts::RateSample a, b;
             a.t_s = b.t_s = 0.05 * j;
             w_true(a.t_s, a.w);
             w_true(b.t_s + off, b.w);
@@ -596,7 +596,7 @@ void check_timesync_synthetic()
             }
             ref.push_back(a);
             cam.push_back(b);
-            rprd::RateSample f = a, g = b;
+            rpts::RateSample f = a, g = b;
             for (int i = 0; i < 3; ++i) {
                 f.w[i] = 0.1 + noise();
                 g.w[i] = 0.1 + noise();
@@ -604,8 +604,8 @@ void check_timesync_synthetic()
             flat_ref.push_back(f);
             flat_cam.push_back(g);
         }
-        rprd::OffsetFit fit;
-        const bool ok = rprd::fit_offset(ref, cam, 0.2, 0.001, &fit);
+        rpts::OffsetFit fit;
+        const bool ok = rpts::fit_offset(ref, cam, 0.2, 0.001, &fit);
         char what[160];
         std::snprintf(what, sizeof what,
                       "timesync: offset %.0f ms found within 3 sigma (%.2f +- %.2f ms)",
@@ -613,7 +613,7 @@ void check_timesync_synthetic()
         check(ok && std::fabs(fit.offset_s - off) <= 3.0 * fit.sigma_s && fit.sigma_s < 0.005,
               what, 1e3 * (fit.offset_s - off));
         if (off == 0.0) {
-            const bool ok_flat = rprd::fit_offset(flat_ref, flat_cam, 0.2, 0.001, &fit);
+            const bool ok_flat = rpts::fit_offset(flat_ref, flat_cam, 0.2, 0.001, &fit);
             check(ok_flat && std::isinf(fit.sigma_s),
                   "timesync: a constant rate leaves the offset undetermined (sigma infinite)",
                   fit.snr);
@@ -635,11 +635,11 @@ void check_timesync_euroc(const rprd::Sequence &e)
         for (size_t j = 0; j < right.size(); ++j) {
             right[j] = e.img[1][j + (size_t)shift];
         }
-        std::vector<rprd::RateSample> w0, w1;
-        rprd::OffsetFit fit;
-        const bool ok = rprd::camera_rates(s.img[0], s.utime, s.rig.cam[0], &w0, &err) &&
-                        rprd::camera_rates(right, s.utime, s.rig.cam[1], &w1, &err) &&
-                        rprd::fit_offset(w0, w1, 0.2, 0.001, &fit);
+        std::vector<rpts::RateSample> w0, w1;
+        rpts::OffsetFit fit;
+        const bool ok = rpts::camera_rates(s.img[0], s.utime, s.rig.cam[0], &w0, &err) &&
+                        rpts::camera_rates(right, s.utime, s.rig.cam[1], &w1, &err) &&
+                        rpts::fit_offset(w0, w1, 0.2, 0.001, &fit);
         const double truth = 1e-6 * (double)(e.utime[(size_t)shift] - e.utime[0]);
         char what[200];
         std::snprintf(what, sizeof what,

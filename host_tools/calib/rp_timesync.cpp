@@ -11,7 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
-namespace rprd {
+namespace rpts {
 
 namespace {
 
@@ -172,6 +172,84 @@ int rotation_ransac(const std::vector<cv::Point2f> &na, const std::vector<cv::Po
 
 }  // namespace
 
+RateTracker::RateTracker(const rp_rig_cam_t &c)
+{
+    K_ = (cv::Mat_<double>(3, 3) << (double)c.cam.fx, 0, (double)c.cam.cx, 0, (double)c.cam.fy,
+          (double)c.cam.cy, 0, 0, 1);
+    dist_ = (cv::Mat_<double>(1, 5) << (double)c.cam.k1, (double)c.cam.k2, (double)c.cam.p1,
+             (double)c.cam.p2, (double)c.cam.k3);
+    Rk_ = cv::Mat(3, 3, CV_64F);
+    for (int i = 0; i < 9; ++i) {
+        Rk_.at<double>(i / 3, i % 3) = (double)c.R[i];
+    }
+    thr_ = 2.0 / (double)c.cam.fx; /* 2 px, as an angle (rad) */
+}
+
+bool RateTracker::add(const cv::Mat &grey, int64_t utime)
+{
+    if (grey.empty() || grey.type() != CV_8UC1) {
+        return false;
+    }
+    const bool have_prev = !prev_.empty() && prev_.size() == grey.size() && utime > prev_t_;
+    if (have_prev) {
+        step(grey, utime);
+    }
+    grey.copyTo(prev_);
+    prev_t_ = utime;
+    return true;
+}
+
+void RateTracker::restart()
+{
+    prev_.release();
+}
+
+void RateTracker::step(const cv::Mat &next, int64_t utime)
+{
+    std::vector<cv::Point2f> a, b, back;
+    std::vector<uchar> st, st2;
+    std::vector<float> e;
+    cv::goodFeaturesToTrack(prev_, a, 400, 0.01, 8);
+    if (a.size() < (size_t)kMinInliers) {
+        return;
+    }
+    cv::calcOpticalFlowPyrLK(prev_, next, a, b, st, e, cv::Size(21, 21), 3);
+    cv::calcOpticalFlowPyrLK(next, prev_, b, back, st2, e, cv::Size(21, 21), 3);
+    std::vector<cv::Point2f> pa, pb;
+    for (size_t i = 0; i < a.size(); ++i) {
+        const float dx = back[i].x - a[i].x, dy = back[i].y - a[i].y;
+        if (st[i] && st2[i] && dx * dx + dy * dy < 1.0f) {
+            pa.push_back(a[i]);
+            pb.push_back(b[i]);
+        }
+    }
+    if (pa.size() < (size_t)kMinInliers) {
+        return;
+    }
+    std::vector<cv::Point2f> na, nb;
+    cv::undistortPoints(pa, na, K_, dist_);
+    cv::undistortPoints(pb, nb, K_, dist_);
+    /* a pure rotation of the bearings: in a scene far against the motion between two images
+     * the essential matrix's rotation is ill-conditioned and noisier (an essential matrix
+     * chosen by Torr's GRIC where it fits better was tried: docs/time.md) */
+    cv::Matx33d R;
+    const int inl = rotation_ransac(na, nb, thr_, &R);
+    const double dt = 1e-6 * (double)(utime - prev_t_);
+    if (inl < kMinInliers || !(dt > 0.0)) {
+        return;
+    }
+    /* b_{j+1} = R b_j: the camera turned by R^T; in cam1's frame R_k R^T R_k^T */
+    double v[3];
+    rotvec(cv::Mat(Rk_ * cv::Mat(R.t()) * Rk_.t()), v);
+    RateSample smp;
+    smp.t_s = 1e-6 * 0.5 * (double)(prev_t_ + utime);
+    for (int i = 0; i < 3; ++i) {
+        smp.w[i] = v[i] / dt;
+    }
+    smp.inliers = inl;
+    samples_.push_back(smp);
+}
+
 bool camera_rates(const std::vector<std::string> &img, const std::vector<int64_t> &utime,
                   const rp_rig_cam_t &c, std::vector<RateSample> *out, std::string *err)
 {
@@ -180,65 +258,16 @@ bool camera_rates(const std::vector<std::string> &img, const std::vector<int64_t
         *err = "camera_rates: need at least two images with stamps";
         return false;
     }
-    const cv::Mat K = (cv::Mat_<double>(3, 3) << (double)c.cam.fx, 0, (double)c.cam.cx, 0,
-                       (double)c.cam.fy, (double)c.cam.cy, 0, 0, 1);
-    const cv::Mat dist = (cv::Mat_<double>(1, 5) << (double)c.cam.k1, (double)c.cam.k2,
-                          (double)c.cam.p1, (double)c.cam.p2, (double)c.cam.k3);
-    cv::Mat Rk(3, 3, CV_64F);
-    for (int i = 0; i < 9; ++i) {
-        Rk.at<double>(i / 3, i % 3) = (double)c.R[i];
-    }
-    const double thr = 2.0 / (double)c.cam.fx; /* 2 px, as an angle (rad) */
-    cv::Mat prev = cv::imread(img[0], cv::IMREAD_GRAYSCALE);
-    if (prev.empty()) {
-        *err = img[0] + ": cannot read";
-        return false;
-    }
-    for (size_t j = 0; j + 1 < img.size(); ++j) {
-        cv::Mat next = cv::imread(img[j + 1], cv::IMREAD_GRAYSCALE);
-        if (next.empty()) {
-            *err = img[j + 1] + ": cannot read";
+    RateTracker rt(c);
+    for (size_t j = 0; j < img.size(); ++j) {
+        const cv::Mat m = cv::imread(img[j], cv::IMREAD_GRAYSCALE);
+        if (m.empty()) {
+            *err = img[j] + ": cannot read";
             return false;
         }
-        std::vector<cv::Point2f> a, b, back;
-        std::vector<uchar> st, st2;
-        std::vector<float> e;
-        cv::goodFeaturesToTrack(prev, a, 400, 0.01, 8);
-        if (a.size() >= (size_t)kMinInliers) {
-            cv::calcOpticalFlowPyrLK(prev, next, a, b, st, e, cv::Size(21, 21), 3);
-            cv::calcOpticalFlowPyrLK(next, prev, b, back, st2, e, cv::Size(21, 21), 3);
-            std::vector<cv::Point2f> pa, pb;
-            for (size_t i = 0; i < a.size(); ++i) {
-                const float dx = back[i].x - a[i].x, dy = back[i].y - a[i].y;
-                if (st[i] && st2[i] && dx * dx + dy * dy < 1.0f) {
-                    pa.push_back(a[i]);
-                    pb.push_back(b[i]);
-                }
-            }
-            if (pa.size() >= (size_t)kMinInliers) {
-                std::vector<cv::Point2f> na, nb;
-                cv::undistortPoints(pa, na, K, dist);
-                cv::undistortPoints(pb, nb, K, dist);
-                cv::Matx33d R;
-                const int inl = rotation_ransac(na, nb, thr, &R);
-                const double dt = 1e-6 * (double)(utime[j + 1] - utime[j]);
-                if (inl >= kMinInliers && dt > 0.0) {
-                    /* b_{j+1} = R b_j: the camera turned by R^T; in cam1's frame
-                     * R_k R^T R_k^T */
-                    double v[3];
-                    rotvec(cv::Mat(Rk * cv::Mat(R.t()) * Rk.t()), v);
-                    RateSample smp;
-                    smp.t_s = 1e-6 * 0.5 * (double)(utime[j] + utime[j + 1]);
-                    for (int i = 0; i < 3; ++i) {
-                        smp.w[i] = v[i] / dt;
-                    }
-                    smp.inliers = inl;
-                    out->push_back(smp);
-                }
-            }
-        }
-        prev = next;
+        rt.add(m, utime[j]);
     }
+    *out = rt.samples();
     if (out->empty()) {
         *err = "camera_rates: no interval gave a rotation";
         return false;
@@ -325,4 +354,4 @@ bool fit_offset(const std::vector<RateSample> &ref, const std::vector<RateSample
     return true;
 }
 
-}  // namespace rprd
+}  // namespace rpts

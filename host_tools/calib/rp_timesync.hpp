@@ -5,7 +5,10 @@
  * own frame. Camera k's rotation between two consecutive images (OpenCV KLT tracks, their
  * undistorted bearings rotated onto each other: RANSAC over pairs, Kabsch's fit on the inliers)
  * divided by their stamp interval is w over that interval, expressed in cam1's frame through
- * the extrinsics (w_1 = R_k w_k). With capture = stamp +
+ * the extrinsics (w_1 = R_k w_k). A pure rotation takes the translation's parallax for
+ * rotation: in a scene near against the motion between two images (the rendered room, 0.7-1 m
+ * at 0.5 m/s) the cameras that face across the motion see different rates, and the fit refuses
+ * them (below) rather than report a lag. With capture = stamp +
  * offset (rp_ekf.h's convention), camera k's sample at stamp time s is the reference camera's
  * w at s + offset_k. The offset is the lag that best aligns the two series: the least-squares
  * fit of w_ref(s + offset) to w_k(s) (both interpolated linearly) over a grid of lags, refined
@@ -26,9 +29,11 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "rigpose/rp_rig.h"
 
-namespace rprd {
+namespace rpts {
 
 struct RateSample {
     double t_s = 0.0;  /* mid-point of the two images' stamps, s */
@@ -36,9 +41,29 @@ struct RateSample {
     int inliers = 0;   /* essential-matrix inliers */
 };
 
+/* One camera's rate series, image by image (a live source or a recording): each image after
+ * the first gives a sample for the interval from the previous one (its stamp later, the same
+ * size), unless fewer than 30 tracks fit the rotation. */
+class RateTracker {
+public:
+    explicit RateTracker(const rp_rig_cam_t &c);
+    /* grey: 8-bit, one channel (copied); utime: its stamp, us. False for an empty or other
+     * image (nothing kept). */
+    bool add(const cv::Mat &grey, int64_t utime);
+    void restart(); /* the next image starts a new interval (a gap: a missing frame) */
+    const std::vector<RateSample> &samples() const { return samples_; }
+
+private:
+    void step(const cv::Mat &next, int64_t utime);
+    cv::Mat K_, dist_, Rk_, prev_;
+    int64_t prev_t_ = 0;
+    double thr_ = 0.0;
+    std::vector<RateSample> samples_;
+};
+
 /* Camera c's angular velocity between consecutive images img[j], img[j + 1] (stamps utime,
- * us). Intervals with fewer than 30 inliers are left out. False (err) if an image cannot be
- * read or no interval gives a rotation. */
+ * us), through RateTracker. False (err) if an image cannot be read or no interval gives a
+ * rotation. */
 bool camera_rates(const std::vector<std::string> &img, const std::vector<int64_t> &utime,
                   const rp_rig_cam_t &c, std::vector<RateSample> *out, std::string *err);
 
@@ -58,6 +83,6 @@ struct OffsetFit {
 bool fit_offset(const std::vector<RateSample> &ref, const std::vector<RateSample> &cam,
                 double max_lag_s, double step_s, OffsetFit *out);
 
-}  // namespace rprd
+}  // namespace rpts
 
 #endif /* RP_TIMESYNC_HPP */
