@@ -219,8 +219,13 @@ static const char *cam_state_str(int state); /* below, with the printing */
 static void say_cam_changes(const rp_hal_set_t *set, int32_t seq)
 {
     for (uint8_t k = 0; k < g_cfg.rig.n_cams && k < set->n_cams; ++k) {
-        const int8_t st = (int8_t)(set->cam[k].flags &
-                                   (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE | RP_HAL_CAM_DROPPED));
+        int8_t st = (int8_t)(set->cam[k].flags &
+                             (RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE | RP_HAL_CAM_DROPPED));
+        if (g_cfg.hal.sets_latest && !(st & RP_HAL_CAM_GONE)) {
+            /* cameras at their own rates: no new frame in a set is their normal (still on
+             * the status channel), not news */
+            st = (int8_t)(st & ~RP_HAL_CAM_MISSING);
+        }
         if (st == g_said_state[k] || !say_ok(&g_say_cam, rp_hal_now_us())) {
             continue;
         }

@@ -602,6 +602,36 @@ static void test_distributed_keys(void **state)
     assert_int_equal(parse(t), RP_CFG_E_RANGE);
 }
 
+/* source.sets / set_camera: matched by default; latest with the first camera, a named one or
+ * any; a bad value, an unknown camera, or set_camera without latest refused. */
+static void test_source_sets(void **state)
+{
+    (void)state;
+    assert_int_equal(parse(edited(0, NULL)), RP_CFG_OK);
+    assert_int_equal(g_cfg.hal.sets_latest, 0);
+    static const struct { const char *line; rp_cfg_status_t st; uint8_t latest; int8_t cam; } cases[] = {
+        {"  timeout_ms: 500\n  sets: latest", RP_CFG_OK, 1, 0},
+        {"  timeout_ms: 500\n  sets: latest\n  set_camera: right", RP_CFG_OK, 1, 1},
+        {"  timeout_ms: 500\n  sets: latest\n  set_camera: any", RP_CFG_OK, 1, -1},
+        {"  timeout_ms: 500\n  sets: matched", RP_CFG_OK, 0, 0},
+        {"  timeout_ms: 500\n  sets: newest", RP_CFG_E_RANGE, 0, 0},
+        {"  timeout_ms: 500\n  sets: latest\n  set_camera: middle", RP_CFG_E_RANGE, 0, 0},
+        {"  timeout_ms: 500\n  set_camera: right", RP_CFG_E_RANGE, 0, 0},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        const rp_cfg_status_t st = parse(edited(4, cases[i].line));
+        if (st != cases[i].st) {
+            fail_msg("case %zu: %d (%s)", i, (int)st, g_err);
+        }
+        if (st == RP_CFG_OK) {
+            assert_int_equal(g_cfg.hal.sets_latest, cases[i].latest);
+            assert_int_equal(g_cfg.hal.set_cam, cases[i].cam);
+        } else {
+            assert_non_null(strstr(g_err, "source.set"));
+        }
+    }
+}
+
 /* The non-overlapping methods pick their cameras by name (cam1..cam4) or from `cams`. */
 static void test_single_camera_methods(void **state)
 {
@@ -1091,6 +1121,7 @@ int main(void)
         cmocka_unit_test(test_replay_index_is_relative_to_the_file),
         cmocka_unit_test(test_distributed_keys),
         cmocka_unit_test(test_single_camera_methods),
+        cmocka_unit_test(test_source_sets),
         cmocka_unit_test(test_truncated_files_never_crash),
         cmocka_unit_test(test_corrupted_files_never_crash),
         cmocka_unit_test(test_minimal_file_is_the_core_default_for_every_layout),

@@ -661,11 +661,13 @@ static int get_pace(ctx_t *c, const yaml_node_t *m, uint8_t *out)
 static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
 {
     static const char *const known[] = {"kind",     "timeout_ms",   "sync_tol_us", "retry_ms",
-                                        "realtime", "replay_index", "sim",         NULL};
+                                        "realtime", "replay_index", "sim",         "sets",
+                                        "set_camera", NULL};
     static const char *const sim_known[] = {"seed", "frames", "noise_px", "drop_cam",
                                             "drop_from", "motion", NULL};
     yaml_node_t *m, *sm;
-    char kind[16], rel[RP_HAL_PATH_MAX], motion[16] = "paper";
+    char kind[16], rel[RP_HAL_PATH_MAX], motion[16] = "paper", sets[16] = "matched";
+    char set_cam[RP_CFG_NAME_MAX] = "";
     long long to, tol, retry, seed, frames, drop_cam, drop_from;
     if (get_map(c, root, "", "source", 1, &m) ||
         check_keys(c, m, "source", known) ||
@@ -675,6 +677,8 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         get_int(c, m, "source", "retry_ms", 0, 1000, 10, 60000, &retry) ||
         get_pace(c, m, &cfg->hal.realtime) ||
         get_str(c, m, "source", "replay_index", 0, "", 0, rel, sizeof rel) ||
+        get_str(c, m, "source", "sets", 0, "matched", 0, sets, sizeof sets) ||
+        get_str(c, m, "source", "set_camera", 0, "", 0, set_cam, sizeof set_cam) ||
         get_map(c, m, "source", "sim", 0, &sm)) {
         return -1;
     }
@@ -692,6 +696,34 @@ static int parse_source(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
     }
     cfg->hal.timeout_ms = (uint32_t)to;
     cfg->hal.sync_tol_us = tol;
+    /* sets: matched (frames within sync_tol_us) or latest (free-running cameras: a set per
+     * frame of set_camera, the first camera by default, or of any camera) */
+    if (strcmp(sets, "matched") == 0 || strcmp(sets, "latest") == 0) {
+        cfg->hal.sets_latest = (uint8_t)(sets[0] == 'l');
+    } else {
+        return fail(c, RP_CFG_E_RANGE, map_get(c, m, "sets"), "source.sets",
+                    "'%s' is not one of matched, latest", sets);
+    }
+    cfg->hal.set_cam = 0;
+    if (set_cam[0] != '\0') {
+        if (!cfg->hal.sets_latest) {
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "set_camera"), "source.set_camera",
+                        "only with sets: latest");
+        }
+        cfg->hal.set_cam = -2;
+        if (strcmp(set_cam, "any") == 0) {
+            cfg->hal.set_cam = -1;
+        }
+        for (uint8_t j = 0; j < cfg->rig.n_cams && cfg->hal.set_cam == -2; ++j) {
+            if (strcmp(cfg->cam_name[j], set_cam) == 0) {
+                cfg->hal.set_cam = (int8_t)j;
+            }
+        }
+        if (cfg->hal.set_cam == -2) {
+            return fail(c, RP_CFG_E_RANGE, map_get(c, m, "set_camera"), "source.set_camera",
+                        "no camera is named '%s' (or give any)", set_cam);
+        }
+    }
     cfg->hal.retry_ms = (uint32_t)retry;
     if (cfg->hal.kind == RP_HAL_SRC_REPLAY) {
         if (rel[0] == '\0') {

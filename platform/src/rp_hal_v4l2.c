@@ -8,7 +8,9 @@
  * grab   poll() on every live device; each device's ready frames are dequeued and held (up to
  *        RP_HAL_V4L2_HOLD per camera, the oldest given back when full). Frames are grouped by
  *        kernel timestamp (rp_hal_group): the newest set in which every live camera has a frame
- *        within sync_tol_us; frames that no set can use go back to the driver. A set's frames
+ *        within sync_tol_us; frames that no set can use go back to the driver. Free-running
+ *        cameras at their own rates (sets_latest): a set each time the set camera delivers a
+ *        frame, every camera with its newest frame not yet delivered (rp_hal_group_latest). A set's frames
  *        stay with the caller until the next grab: GREY and planar YUV images are the driver's
  *        buffers themselves (zero copy), YUYV / UYVY / MJPEG are converted to grey. A camera whose device fails (ENODEV: it
  *        was unplugged) or that delivers nothing for timeout_ms (stalled) is closed, flagged
@@ -169,6 +171,30 @@ uint8_t rp_hal_group(const int64_t *t_us, const uint8_t *count, uint8_t n, uint8
         }
     }
     *anchor_us = found ? best : 0;
+    return picked;
+}
+
+uint8_t rp_hal_group_latest(const int64_t *t_us, const uint8_t *count, uint8_t n, uint8_t stride,
+                            int ref, int8_t *pick, int64_t *anchor_us)
+{
+    int64_t anchor = 0;
+    uint8_t found = 0;
+    for (uint8_t j = 0; j < n; j++) {
+        pick[j] = -1;
+        if ((ref < 0 || j == ref) && count[j] > 0) {
+            const int64_t t = t_us[(size_t)j * stride + count[j] - 1];
+            anchor = !found || t > anchor ? t : anchor;
+            found = 1;
+        }
+    }
+    uint8_t picked = 0;
+    for (uint8_t j = 0; j < n && found; j++) {
+        if (count[j] > 0) {
+            pick[j] = (int8_t)(count[j] - 1);
+            picked++;
+        }
+    }
+    *anchor_us = found ? anchor : 0;
     return picked;
 }
 
@@ -592,9 +618,11 @@ static rp_hal_status_t v4l2_open(void **ctx, const rp_hal_cfg_t *cfg, char *err)
     if (s->open) {
         return rp_hal_fail(err, RP_HAL_E_STATE, "v4l2: already open");
     }
-    if (cfg->sync_tol_us < 0 || cfg->timeout_ms == 0 || cfg->retry_ms == 0) {
+    if (cfg->sync_tol_us < 0 || cfg->timeout_ms == 0 || cfg->retry_ms == 0 ||
+        (cfg->sets_latest && cfg->set_cam >= (int)cfg->n_cams)) {
         return rp_hal_fail(err, RP_HAL_E_ARG,
-                           "v4l2: need sync_tol_us >= 0, timeout_ms > 0, retry_ms > 0");
+                           "v4l2: need sync_tol_us >= 0, timeout_ms > 0, retry_ms > 0, a set "
+                           "camera of the rig");
     }
     memset(s, 0, sizeof *s);
     s->cfg = *cfg;
@@ -791,13 +819,26 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
                 t[i * RP_HAL_V4L2_HOLD + k] = c->held[k].t_us;
             }
         }
-        if (rp_hal_group(t, count, n, RP_HAL_V4L2_HOLD, need, s->cfg.sync_tol_us, pick,
-                         &anchor) > 0) {
+        if (s->cfg.sets_latest) {
+            /* free-running: the set camera's frame makes the set; while it is gone (or
+             * rejoining) any camera's does, so the other cameras go on */
+            const int ref = s->cfg.set_cam >= 0 && s->cfg.set_cam < n &&
+                                    need[s->cfg.set_cam]
+                                ? s->cfg.set_cam
+                                : -1;
+            if (rp_hal_group_latest(t, count, n, RP_HAL_V4L2_HOLD, ref, pick, &anchor) > 0) {
+                fill_set(s, set, pick, anchor);
+                set->seq = s->set_seq++;
+                return RP_HAL_OK;
+            }
+        } else if (rp_hal_group(t, count, n, RP_HAL_V4L2_HOLD, need, s->cfg.sync_tol_us, pick,
+                                &anchor) > 0) {
             fill_set(s, set, pick, anchor);
             set->seq = s->set_seq++;
             return RP_HAL_OK;
         }
-        for (uint8_t i = 0; i < n; i++) { /* frames that can never be in a set go back */
+        for (uint8_t i = 0; i < n && !s->cfg.sets_latest; i++) { /* frames that can never be
+                                                                    * in a set go back */
             const uint8_t h = rp_hal_group_hopeless(t, count, n, RP_HAL_V4L2_HOLD, need,
                                                     s->cfg.sync_tol_us, i);
             if (h > 0 && cam_drop_held(&s->cam[i], h) != 0) {

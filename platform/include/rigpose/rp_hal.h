@@ -105,6 +105,14 @@ typedef struct {
     uint8_t n_cams;                      /* 1..RP_MAX_CAMS */
     rp_hal_cam_cfg_t cam[RP_MAX_CAMS];
     int64_t sync_tol_us;                 /* v4l2: frames within this of the set time group */
+    uint8_t sets_latest;                 /* v4l2: 0 (matched): a set is the newest group of
+                                          * frames within sync_tol_us, one per live camera;
+                                          * 1 (latest, free-running cameras, their own rates):
+                                          * a set each time camera set_cam delivers a frame, every
+                                          * camera with its newest frame not yet delivered, the
+                                          * others MISSING (rp_hal_group_latest) */
+    int8_t set_cam;                      /* latest: that camera; -1: any camera (a set for
+                                          * every frame that arrives) */
     uint32_t timeout_ms;                 /* grab gives up after this */
     uint32_t retry_ms;                   /* v4l2: reopen a vanished device this often */
     char replay_index[RP_HAL_PATH_MAX];  /* replay: frames.csv, or the folder holding it */

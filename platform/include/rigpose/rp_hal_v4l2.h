@@ -60,6 +60,15 @@ uint32_t rp_hal_seq_update(rp_hal_seq_t *s, uint32_t seq);
 uint8_t rp_hal_group(const int64_t *t_us, const uint8_t *count, uint8_t n, uint8_t stride,
                      const uint8_t *need, int64_t tol_us, int8_t *pick, int64_t *anchor_us);
 
+/* Free-running cameras (rp_hal_cfg_t.sets_latest): a set as soon as camera ref (ref < 0: any
+ * camera) holds a frame; the anchor is its newest held frame (any camera's newest with ref < 0),
+ * and every camera takes its newest held frame (pick[i] = count[i] - 1, or -1 for none; the
+ * older ones are not used: a slow consumer skips frames rather than falls behind). Each frame
+ * is delivered once, in the first set after it arrived, with its own time. Returns how many
+ * cameras were picked, 0 if there is no set (ref holds nothing; pick all -1, *anchor_us 0). */
+uint8_t rp_hal_group_latest(const int64_t *t_us, const uint8_t *count, uint8_t n, uint8_t stride,
+                            int ref, int8_t *pick, int64_t *anchor_us);
+
 /* How many of camera i's oldest held frames can never be in a set: a frame at t is hopeless
  * when some needed camera j != i holds frames that are all newer than t + tol_us (its later
  * frames are newer still). */

@@ -255,6 +255,85 @@ static void test_group_free_running(void **state)
     }
 }
 
+/* sets: latest (free-running cameras at their own rates): three cameras at 30, 25 and 15 fps
+ * with random phases, frames arriving as a driver would deliver them (checked every 1 ms), a
+ * set whenever camera 0 holds a frame (rp_hal_group_latest), picked frames used up as the
+ * source does. Every camera-0 frame makes exactly one set; every frame of the others is
+ * delivered exactly once and at most one camera-0 period after it arrived (nothing skipped:
+ * the consumer keeps up); with ref -1 every frame of every camera makes a set. */
+static void test_group_latest(void **state)
+{
+    (void)state;
+    enum { N = 3 };
+    const int64_t period[N] = {33333, 40000, 66667};
+    for (int ref = -1; ref <= 0; ref++) {
+        int64_t t[N * HOLD] = {0}, next[N];
+        uint8_t count[N] = {0};
+        long frames[N] = {0}, delivered[N] = {0}, sets = 0;
+        int64_t worst_wait = 0;
+        for (int i = 0; i < N; i++) {
+            next[i] = (int64_t)rp_test_urand(0.0, (double)period[i]);
+        }
+        for (int64_t now = 0; now < 10 * 1000000; now += 1000) {
+            for (int i = 0; i < N; i++) {
+                if (now >= next[i]) {
+                    assert_true(count[i] < HOLD);
+                    t[i * HOLD + count[i]++] = next[i];
+                    frames[i]++;
+                    next[i] += period[i];
+                }
+            }
+            int8_t pick[N];
+            int64_t anchor;
+            const uint8_t got = rp_hal_group_latest(t, count, N, HOLD, ref, pick, &anchor);
+            if (got == 0) {
+                for (int i = 0; i < N; i++) {
+                    assert_int_equal(pick[i], -1);
+                }
+                assert_true(ref < 0 || count[0] == 0);
+                continue;
+            }
+            sets++;
+            for (int i = 0; i < N; i++) {
+                if (pick[i] < 0) {
+                    assert_int_equal(count[i], 0);
+                    continue;
+                }
+                assert_int_equal(pick[i], count[i] - 1); /* its newest */
+                assert_int_equal(count[i], 1);           /* nothing skipped */
+                const int64_t wait = now - t[i * HOLD + pick[i]];
+                worst_wait = wait > worst_wait ? wait : worst_wait;
+                delivered[i]++;
+                count[i] = 0;
+            }
+        }
+        printf("sets: latest, set camera %d: %ld sets in 10 s; frames delivered %ld/%ld, "
+               "%ld/%ld, %ld/%ld; longest wait %.1f ms\n",
+               ref, sets, delivered[0], frames[0], delivered[1], frames[1], delivered[2],
+               frames[2], (double)worst_wait / 1000.0);
+        for (int i = 0; i < N; i++) {
+            assert_true(delivered[i] == frames[i] || delivered[i] == frames[i] - 1); /* the last
+                                                                              * may wait */
+        }
+        if (ref == 0) {
+            assert_true(sets == delivered[0]);
+            assert_true(worst_wait <= period[0]);
+        } else {
+            assert_true(worst_wait <= 1000); /* a set as soon as any frame is there */
+        }
+    }
+    /* nothing held by the set camera: no set, even with the others' frames */
+    int64_t t[2 * HOLD] = {0};
+    uint8_t count[2] = {0, 1};
+    t[1 * HOLD] = 5000;
+    int8_t pick[2];
+    int64_t anchor = 7;
+    assert_int_equal(rp_hal_group_latest(t, count, 2, HOLD, 0, pick, &anchor), 0);
+    assert_true(anchor == 0 && pick[0] == -1 && pick[1] == -1);
+    assert_int_equal(rp_hal_group_latest(t, count, 2, HOLD, -1, pick, &anchor), 1);
+    assert_true(anchor == 5000 && pick[0] == -1 && pick[1] == 0);
+}
+
 /* Without a device: a missing node or a file that is no V4L2 device is E_OPEN naming it; a bad
  * configuration is E_ARG. */
 static void test_v4l2_open_errors(void **state)
@@ -290,6 +369,7 @@ int main(void)
         cmocka_unit_test(test_seq_drops),
         cmocka_unit_test(test_group),
         cmocka_unit_test(test_group_free_running),
+        cmocka_unit_test(test_group_latest),
         cmocka_unit_test(test_v4l2_open_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
