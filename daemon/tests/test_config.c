@@ -212,14 +212,16 @@ static void test_gc_metric_scale_sigma(void **state)
     assert_near(g_cfg.pipe.gc.mscale_sigma, 0.3, RP_TOL_TIGHT);
 }
 
-/* cameras[i].time_offset_s is every estimator's start offset of camera i;
- * estimator.estimate_time_offsets makes them states (rp_vo_ekf_offsets). */
+/* cameras[i].time_offset_s is every estimator's start offset of camera i and the v4l2 source's
+ * grouping offset; estimator.estimate_time_offsets makes them states (rp_vo_ekf_offsets). */
 static void test_time_offsets(void **state)
 {
     (void)state;
     assert_int_equal(parse(edited(20, "    angles: [0, 0, 0]\n    time_offset_s: -0.025")),
                      RP_CFG_OK);
     assert_near(g_cfg.cam_time_offset_s[1], -0.025, 0.0);
+    assert_true(g_cfg.hal.cam[1].offset_us == -25000); /* v4l2 groups by capture time */
+    assert_true(g_cfg.hal.cam[0].offset_us == 0);
     assert_near(g_cfg.pipe.stereo.ekf.toff0_s[1], -0.025, RP_TOL_TIGHT);
     assert_near(g_cfg.pipe.gc.ekf.toff0_s[1], -0.025, RP_TOL_TIGHT);
     assert_near(g_cfg.pipe.stereo.ekf.toff0_s[0], 0.0, 0.0);

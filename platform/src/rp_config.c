@@ -474,6 +474,7 @@ static int parse_camera(ctx_t *c, const yaml_node_t *m, unsigned i, rp_config_t 
         get_num(c, m, path, "time_offset_s", 0, 0.0, -1.0, 0, 1.0, &cfg->cam_time_offset_s[i])) {
         return -1;
     }
+    hc->offset_us = (int64_t)llround(cfg->cam_time_offset_s[i] * 1e6);
     for (unsigned j = 0; j < i; ++j) {
         if (strcmp(cfg->cam_name[j], cfg->cam_name[i]) == 0) {
             key_path(kp, path, "name");

@@ -7,10 +7,12 @@
  *        mmap buffers.
  * grab   poll() on every live device; each device's ready frames are dequeued and held (up to
  *        RP_HAL_V4L2_HOLD per camera, the oldest given back when full). Frames are grouped by
- *        kernel timestamp (rp_hal_group): the newest set in which every live camera has a frame
- *        within sync_tol_us; frames that no set can use go back to the driver. Free-running
- *        cameras at their own rates (sets_latest): a set each time the set camera delivers a
- *        frame, every camera with its newest frame not yet delivered (rp_hal_group_latest). A set's frames
+ *        capture time (the kernel timestamp plus the camera's configured clock offset,
+ *        rp_hal_cam_cfg_t.offset_us; each frame keeps its own stamp): the newest set in which
+ *        every live camera has a frame within sync_tol_us (rp_hal_group); frames that no set
+ *        can use go back to the driver. Free-running cameras at their own rates (sets_latest):
+ *        a set each time the set camera delivers a frame, every camera with its newest frame not
+ *        yet delivered (rp_hal_group_latest). A set's frames
  *        stay with the caller until the next grab: GREY and planar YUV images are the driver's
  *        buffers themselves (zero copy), YUYV / UYVY / MJPEG are converted to grey. A camera whose device fails (ENODEV: it
  *        was unplugged) or that delivers nothing for timeout_ms (stalled) is closed, flagged
@@ -732,7 +734,8 @@ static void fill_set(v4l2_src_t *s, rp_hal_set_t *set, const int8_t pick[], int6
         }
         if (pick[i] < 0) {
             uint8_t old = 0;
-            while (old < c->n_held && c->held[old].t_us < anchor - s->cfg.sync_tol_us) {
+            while (old < c->n_held &&
+                   c->held[old].t_us + s->cfg.cam[i].offset_us < anchor - s->cfg.sync_tol_us) {
                 old++;
             }
             (void)cam_drop_held(c, old); /* a failing device shows at the next read */
@@ -815,8 +818,8 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
             const v4l2_cam_t *c = &s->cam[i];
             need[i] = (uint8_t)(!c->gone && !c->rejoining);
             count[i] = c->gone ? 0 : c->n_held;
-            for (uint8_t k = 0; k < count[i]; k++) {
-                t[i * RP_HAL_V4L2_HOLD + k] = c->held[k].t_us;
+            for (uint8_t k = 0; k < count[i]; k++) { /* by capture time: stamp + offset */
+                t[i * RP_HAL_V4L2_HOLD + k] = c->held[k].t_us + s->cfg.cam[i].offset_us;
             }
         }
         if (s->cfg.sets_latest) {
@@ -857,7 +860,7 @@ static rp_hal_status_t v4l2_grab(void *ctx, rp_hal_set_t *set)
                 need[i] = 0;
                 count[i] = c->gone ? 0 : c->n_held;
                 for (uint8_t k = 0; k < count[i]; k++) {
-                    t[i * RP_HAL_V4L2_HOLD + k] = c->held[k].t_us;
+                    t[i * RP_HAL_V4L2_HOLD + k] = c->held[k].t_us + s->cfg.cam[i].offset_us;
                 }
             }
             /* What there is: the newest frame held and those within the tolerance of it. */

@@ -229,15 +229,10 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     rp_pipe_pairmatch_t *pm = &pipe->pm[k];
     const int ta = pipe->cam_trk[sp->a], tb = pipe->cam_trk[sp->b];
     rp_pipe_info_t *info = &pipe->info;
-    if (!image_taken(info->cam_state[sp->a]) || !image_taken(info->cam_state[sp->b])) {
+    if (!image_taken(info->cam_state[sp->a])) {
         return;
     }
     rp_tracker_t *B = &pipe->trk[tb];
-    const rp_pyr_t *pa, *pb;
-    /* ignored: cannot fail: the pipeline's own tracker, checked at init */
-    (void)rp_track_current_pyr(&pipe->trk[ta], &pa);
-    /* ignored: cannot fail: the pipeline's own tracker, checked at init */
-    (void)rp_track_current_pyr(B, &pb);
     uint16_t n_new = 0;
     for (uint16_t i = 0; i < pipe->fs.n[sp->a]; ++i) {
         const rp_feat_t *f = &pipe->fs.f[sp->a][i];
@@ -248,18 +243,27 @@ static void match_new(rp_pipe_t *pipe, uint8_t k)
     if (n_new == 0) {
         return;
     }
-    uint16_t nb = 0;
-    /* ignored: counted in pipe->info.match; no match adds nothing */
-    (void)rp_smatch_pair(&pm->sm, pipe->rig, sp, pa, pb, pm->scratch_a, n_new, pm->scratch_b,
-                         RP_MAX_FEATS_PER_CAM, &nb, &info->match[k]);
-    uint16_t n_adopted = 0;
-    while (n_adopted < nb && rp_track_adopt(B, &pm->scratch_b[n_adopted]) == RP_OK) {
-        ++n_adopted;
+    uint16_t nb = 0, n_adopted = 0;
+    if (image_taken(info->cam_state[sp->b])) {
+        const rp_pyr_t *pa, *pb;
+        /* ignored: cannot fail: the pipeline's own tracker, checked at init */
+        (void)rp_track_current_pyr(&pipe->trk[ta], &pa);
+        /* ignored: cannot fail: the pipeline's own tracker, checked at init */
+        (void)rp_track_current_pyr(B, &pb);
+        /* ignored: counted in pipe->info.match; no match adds nothing */
+        (void)rp_smatch_pair(&pm->sm, pipe->rig, sp, pa, pb, pm->scratch_a, n_new,
+                             pm->scratch_b, RP_MAX_FEATS_PER_CAM, &nb, &info->match[k]);
+        while (n_adopted < nb && rp_track_adopt(B, &pm->scratch_b[n_adopted]) == RP_OK) {
+            ++n_adopted;
+        }
     }
     /* A new left feature without a match gives the stereo estimator nothing (it triangulates
      * matches only) and would hold its cell in the left tracker for as long as it is tracked,
      * keeping the tracker above its top-up threshold: drop it, so that the next top-up can look
-     * for a feature there again (the matcher walks both lists in input order). */
+     * for a feature there again (the matcher walks both lists in input order). So are all of
+     * them when the right camera has no image in this set: they can never be matched (the right
+     * tracker takes features only at their birth), and the left tracker, full of them, would
+     * not detect again until they are lost. */
     uint16_t n_lost = 0;
     for (uint16_t i = 0, j = 0; i < n_new; ++i) {
         if (j < n_adopted && pm->scratch_b[j].id == pm->scratch_a[i].id) {

@@ -102,7 +102,12 @@ RD_RAW = --kitti $(RD_DATA)/kitti_raw_0926_0005_000-090 --frames $(RD_BENCH_KITT
 RD_EU = --euroc $(RD_DATA)/euroc_mh01_000-149 --frames $(RD_BENCH_EUROC)
 RD_REFS = --opencv-ref --direct-ref
 RD_PARTS = kitti00 kitti00_from14 euroc_mh01 kitti00_mirror kitti00_from14_mirror \
-    euroc_mh01_mirror kitti_raw0005 kitti_raw0005_mirror
+    euroc_mh01_mirror kitti_raw0005 kitti_raw0005_mirror euroc_offset50 euroc_from1 euroc_gc
+# The unsynchronised-cameras experiment (docs/time.md): the right camera one frame late, its
+# offset from the rotation rates, regrouped by capture time, refined by the filter; and the
+# correctly paired run on the same frames. gc: the two cameras as a non-overlapping rig.
+RD_OFF50 = $(RD_EU) --pair-shift 1 --sync-rotation --regroup --estimate-offsets 1
+RD_FROM1 = --euroc $(RD_DATA)/euroc_mh01_000-149 --first 1 --frames $$(( $(RD_BENCH_EUROC) - 1 ))
 $(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
 	@mkdir -p $(BUILD)/bench $(RD_DIR)
 	@if [ -d "$(RD_DATA)/kitti00_000-099" ] && [ -d "$(RD_DATA)/euroc_mh01_000-149" ]; then \
@@ -112,6 +117,9 @@ $(BUILD)/bench/realdata.json: $(RD_BIN) FORCE
 	  $(call RD_RUN,kitti00_mirror,$(RD_K00) --mirror) && \
 	  $(call RD_RUN,kitti00_from14_mirror,$(RD_K00) --first 14 --mirror) && \
 	  $(call RD_RUN,euroc_mh01_mirror,$(RD_EU) --mirror) && \
+	  $(call RD_RUN,euroc_offset50,$(RD_OFF50)) && \
+	  $(call RD_RUN,euroc_from1,$(RD_FROM1)) && \
+	  $(call RD_RUN,euroc_gc,$(RD_EU) --layout gc) && \
 	  echo '{}' > $(RD_DIR)/kitti_raw0005.json && echo '{}' > $(RD_DIR)/kitti_raw0005_mirror.json && \
 	  { [ ! -d "$(RD_DATA)/kitti_raw_0926_0005_000-090" ] || \
 	    { $(call RD_RUN,kitti_raw0005,$(RD_RAW) $(RD_REFS)) && \

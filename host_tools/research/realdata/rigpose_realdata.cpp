@@ -494,7 +494,12 @@ void usage(FILE *f)
         "  --trace-scale        gc: per frame, the metric scale's state (rp_vo_gc.h step 6)\n"
         "  --sync-rotation      before the run, estimate the right camera's clock offset from\n"
         "                       the two cameras' rotation rates (rp_timesync.hpp) and start\n"
-        "                       the estimator from it (cameras[1].time_offset_s)\n"
+        "                       the estimator from it (cameras[1].time_offset_s; with\n"
+        "                       --estimate-offsets 1 the offset state starts with its sigma)\n"
+        "  --regroup            pair each left image with the right image captured nearest\n"
+        "                       to it (stamp + the right camera's offset: --sync-rotation or\n"
+        "                       --offset-ms), within half a frame interval (else the right\n"
+        "                       camera has no image in that set); each keeps its own stamp\n"
         "  --pair-shift K       pair the right camera's image j + K with the left's j, stamped\n"
         "                       as simultaneous (a right camera K frames late: the\n"
         "                       clock-offset experiment; --estimate-offsets 1 to estimate it)\n"
@@ -555,6 +560,7 @@ int main(int argc, char **argv)
     rprd::LoadOpts lo;
     bool quiet = false, copy_images = false, no_run = false, opencv_ref = false;
     bool direct_ref = false, steps = false, trace_scale = false, sync_rotation = false;
+    bool regroup = false;
     size_t splice = 0, pair_shift = 0;
     rprd::DirectOpts dopts;
     double check_m = -1.0, check_pct = -1.0;
@@ -583,6 +589,8 @@ int main(int argc, char **argv)
             trace_scale = true;
         } else if (a == "--sync-rotation") {
             sync_rotation = true;
+        } else if (a == "--regroup") {
+            regroup = true;
         } else if (!has_val) {
             std::fprintf(stderr, "rigpose-realdata: %s: unknown option or missing value\n",
                          a.c_str());
@@ -785,9 +793,14 @@ int main(int argc, char **argv)
         sync_sigma_s = fit.sigma_s;
         cfg.stereo.ekf.toff0_s[1] = cfg.gc.ekf.toff0_s[1] = cfg.mono.ekf.toff0_s[1] =
             (rp_real)fit.offset_s;
-        cli_fields.push_back("stereo.ekf.toff0_s");
-        cli_fields.push_back("gc.ekf.toff0_s");
-        cli_fields.push_back("mono.ekf.toff0_s");
+        /* an estimated offset state starts with the fit's own uncertainty */
+        cfg.stereo.ekf.toff_sigma_s = cfg.gc.ekf.toff_sigma_s = cfg.mono.ekf.toff_sigma_s =
+            (rp_real)fit.sigma_s;
+        for (const char *f : {"stereo.ekf.toff0_s", "gc.ekf.toff0_s", "mono.ekf.toff0_s",
+                              "stereo.ekf.toff_sigma_s", "gc.ekf.toff_sigma_s",
+                              "mono.ekf.toff_sigma_s"}) {
+            cli_fields.push_back(f);
+        }
     }
     /* what differs from the core's defaults, one line each on stderr: the rig's numbering, the
      * settings of the command line, those of the configuration file */
@@ -815,6 +828,53 @@ int main(int argc, char **argv)
                                    seq.rig.cam[1].D[2] * seq.rig.cam[1].D[2])),
                 seq_fps(seq));
     print_settings(config.empty() ? "the core's defaults" : why_file.c_str(), cfg);
+    /* each camera's stamp per frame (the set's time unless regrouped) */
+    std::vector<int64_t> cam_t[2] = {seq.utime, seq.utime};
+    if (regroup) {
+        /* sets by capture time (stamp + offset): the left image j with the right image whose
+         * capture is nearest to it, within half the median frame interval */
+        const double off_us = 1e6 * (double)cfg.stereo.ekf.toff0_s[1];
+        const double half_us = 0.5e6 / seq_fps(seq);
+        const std::vector<std::string> right = seq.img[1];
+        size_t paired = 0;
+        for (size_t j = 0; j < seq.utime.size(); ++j) {
+            size_t best = 0;
+            double gap = INFINITY;
+            for (size_t i = 0; i < right.size(); ++i) {
+                const double g = std::fabs((double)seq.utime[i] + off_us - (double)seq.utime[j]);
+                if (g < gap) {
+                    gap = g;
+                    best = i;
+                }
+            }
+            const bool ok = gap <= half_us;
+            seq.img[1][j] = ok ? right[best] : std::string();
+            cam_t[1][j] = ok ? seq.utime[best] : seq.utime[j];
+            paired += ok ? 1u : 0u;
+        }
+        /* leading left images without a partner cannot start the stereo layout: the run starts
+         * at the first pair, its world the left camera there (the truth re-based on it) */
+        size_t lead = 0;
+        while (lead < seq.utime.size() && seq.img[1][lead].empty()) {
+            ++lead;
+        }
+        if (lead > 0 && lead + 2 <= seq.utime.size()) {
+            const rprd::Pose w = rprd::pose_inv(seq.truth[lead]);
+            for (size_t j = lead; j < seq.utime.size(); ++j) {
+                seq.truth[j - lead] = rprd::pose_mul(w, seq.truth[j]);
+            }
+            for (int k = 0; k < 2; ++k) {
+                seq.img[k].erase(seq.img[k].begin(), seq.img[k].begin() + (long)lead);
+                cam_t[k].erase(cam_t[k].begin(), cam_t[k].begin() + (long)lead);
+            }
+            seq.utime.erase(seq.utime.begin(), seq.utime.begin() + (long)lead);
+            seq.truth.resize(seq.utime.size());
+        }
+        std::printf("regrouped by capture time (right camera's offset %.2f ms): %zu of %zu left "
+                    "images paired, the others without a right image; the run starts at the "
+                    "first pair (%zu left image%s before it left out)\n",
+                    1e-3 * off_us, paired, seq.utime.size() + lead, lead, lead == 1 ? "" : "s");
+    }
     if (!replay_out.empty()) {
         if (!write_replay(replay_out, seq, cfg, copy_images)) {
             return 1;
@@ -854,8 +914,12 @@ int main(int argc, char **argv)
     for (size_t j = 0; j < seq.utime.size(); ++j) {
         cv::Mat im[2];
         rp_image_t v[2];
-        const rp_image_t *ptr[2];
+        const rp_image_t *ptr[2] = {nullptr, nullptr};
+        const int64_t ct[2] = {cam_t[0][j], cam_t[1][j]};
         for (int k = 0; k < 2; ++k) {
+            if (seq.img[k][j].empty()) {
+                continue; /* --regroup: no right image captured near this one */
+            }
             im[k] = cv::imread(seq.img[k][j], cv::IMREAD_GRAYSCALE);
             if (im[k].empty()) {
                 std::fprintf(stderr, "rigpose-realdata: %s: cannot read\n", seq.img[k][j].c_str());
@@ -866,7 +930,7 @@ int main(int argc, char **argv)
         }
         rp_estimate_t est;
         const auto t0 = std::chrono::steady_clock::now();
-        st = rp_pipe_step(&pipe, ptr, 2, seq.utime[j], &est);
+        st = rp_pipe_step_timed(&pipe, ptr, ct, 2, seq.utime[j], &est);
         step_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         double p[6];
         for (int i = 0; i < 6; ++i) {

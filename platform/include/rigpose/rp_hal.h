@@ -88,6 +88,9 @@ typedef struct {
     uint16_t w, h;                /* wanted size, px; 0 = any. v4l2 asks for it and refuses a
                                    * different one; replay checks every image against it */
     uint16_t fps;                 /* wanted rate (v4l2) */
+    int64_t offset_us;            /* the camera's clock offset (capture = stamp + offset,
+                                   * cameras[i].time_offset_s): v4l2 groups frames by capture
+                                   * time; the frames keep their own stamps */
 } rp_hal_cam_cfg_t;
 
 /* A way to run jobs in parallel, given by the caller (the daemon's rp_pool_run): runs
