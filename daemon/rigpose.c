@@ -347,14 +347,6 @@ static rp_status_t estimator_step(const rp_hal_set_t *set, rp_estimate_t *est,
     return rp_est_step_images(&g_est, img, cam_utime, set->n_cams, set->utime, est, fs_out);
 }
 
-/* rp_est_set_overlap's hook: the source's next set read (replay: decoded) on the pool's workers
- * while the estimator runs; the next grab waits for it. */
-static void prefetch_next(void *ctx)
-{
-    /* ignored: RP_HAL_E_ARG only for a NULL source, which main rules out */
-    (void)rp_hal_prefetch((rp_hal_source_t *)ctx);
-}
-
 /* ---- printing -------------------------------------------------------------------------------- */
 
 /* One word for a camera's state bits, worst first: a vanished device, no frame in this set,
@@ -629,20 +621,11 @@ int main(int argc, char **argv)
     rp_hal_source_t *src = NULL;
     g_cfg.hal.run_jobs = rp_est_hal_jobs; /* each camera's image decoded on the same threads */
     g_cfg.hal.run_jobs_ctx = &g_est;
-    if (rp_est_threads(&g_est) > 1) { /* the next set decoded while the estimator runs */
-        g_cfg.hal.start_jobs = rp_est_hal_start_jobs;
-        g_cfg.hal.wait_jobs = rp_est_hal_wait_jobs;
-    }
     if ((g_cfg.hal.kind == RP_HAL_SRC_LCM ? source_open_lcm(&g_cfg, lcm)
                                           : source_open(&g_cfg, &src)) != RP_HAL_OK) {
         lcm_destroy(lcm);
         rp_est_close(&g_est);
         return EXIT_SOURCE;
-    }
-
-    if (src != NULL && rp_est_threads(&g_est) > 1) {
-        /* ignored: g_est is not NULL */
-        (void)rp_est_set_overlap(&g_est, prefetch_next, src);
     }
 
     rp_feats_stop_signals(on_signal); /* SIGPIPE: the summary then goes to stderr (below) */

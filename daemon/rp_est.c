@@ -65,35 +65,6 @@ int rp_est_hal_jobs(void *ctx, unsigned n_jobs, void (*fn)(void *arg, unsigned j
     return rp_pool_run(&est->pool, n_jobs, fn, arg) == RP_OK ? 0 : -1;
 }
 
-int rp_est_hal_start_jobs(void *ctx, unsigned n_jobs, void (*fn)(void *arg, unsigned job),
-                          void *arg)
-{
-    rp_est_t *est = (rp_est_t *)ctx;
-    if (est == NULL || fn == NULL) {
-        return -1;
-    }
-    return rp_pool_submit(&est->pool, n_jobs, fn, arg) == RP_OK ? 0 : -1;
-}
-
-int rp_est_hal_wait_jobs(void *ctx)
-{
-    rp_est_t *est = (rp_est_t *)ctx;
-    if (est == NULL) {
-        return -1;
-    }
-    return rp_pool_wait(&est->pool) == RP_OK ? 0 : -1;
-}
-
-rp_status_t rp_est_set_overlap(rp_est_t *est, void (*fn)(void *ctx), void *ctx)
-{
-    if (est == NULL) {
-        return RP_E_ARG;
-    }
-    est->overlap = fn;
-    est->overlap_ctx = ctx;
-    return RP_OK;
-}
-
 rp_status_t rp_est_step(rp_est_t *est, const rp_frameset_t *fs, rp_estimate_t *out)
 {
     if (est == NULL) {
@@ -203,9 +174,6 @@ rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[],
                 (void)rp_pipe_match(&est->pipe); /* every pair matched: the step moves on */
             }
             est->images = NULL;
-            if (est->overlap != NULL) { /* the workers are idle until the next batch */
-                est->overlap(est->overlap_ctx);
-            }
             st = rp_pipe_estimate(&est->pipe, out); /* RP_E_ARG, out LOST, if not matched */
         }
     }

@@ -8,10 +8,7 @@
  * started by rp_est_init. Each camera's tracker of a set is one job of the pool (rp_pipe_track),
  * then each stereo pair's matching (rp_pipe_match_pair); the estimator then runs on the
  * caller's thread. rp_est_hal_jobs lends the
- * same pool to the HAL (rp_hal_cfg_t.run_jobs), so each camera's image is decoded in a job too;
- * rp_est_hal_start_jobs / rp_est_hal_wait_jobs lend it for rp_hal_prefetch, which the caller
- * starts from the hook rp_est_set_overlap installs: the next set's images are decoded on the
- * workers while the estimator runs on the caller's thread.
+ * same pool to the HAL (rp_hal_cfg_t.run_jobs), so each camera's image is decoded in a job too.
  * The poses do not depend on the number of threads (rp_pipe.h: a tracker touches only its own
  * camera's state; the estimator's input is the same frame set in the same order).
  */
@@ -29,8 +26,6 @@ typedef struct {
     const rp_image_t *const *images; /* the set being tracked (read by the jobs) */
     uint8_t order[RP_PIPE_MAX_TRACKERS]; /* trackers in the order their jobs go out */
     uint8_t n_images;
-    void (*overlap)(void *ctx);      /* rp_est_set_overlap */
-    void *overlap_ctx;
 } rp_est_t;
 
 /* Threads rp_est_init starts for cfg: cfg->threads, or for 0 the online cores, at most one
@@ -54,19 +49,6 @@ unsigned rp_est_threads(const rp_est_t *est);
  * same threads. 0, or -1 for a NULL ctx or fn, or a pool not started (the HAL then runs them
  * itself). */
 int rp_est_hal_jobs(void *ctx, unsigned n_jobs, void (*fn)(void *arg, unsigned job), void *arg);
-
-/* rp_hal_cfg_t.start_jobs / wait_jobs over est's pool (rp_pool_submit / rp_pool_wait; ctx:
- * the rp_est_t): 0, or -1 for a NULL ctx or fn, or a pool not started. */
-int rp_est_hal_start_jobs(void *ctx, unsigned n_jobs, void (*fn)(void *arg, unsigned job),
-                          void *arg);
-int rp_est_hal_wait_jobs(void *ctx);
-
-/* fn(ctx) (NULL: none) is called once per rp_est_step_images on more than one thread, on the
- * caller's thread after the stereo matching and before the estimator, while the workers are
- * idle: the place to start work that overlaps the estimator (the daemon: rp_hal_prefetch of the
- * next set, on rp_est_hal_start_jobs). fn must not touch est or the images of the set being
- * estimated. RP_E_ARG: est NULL. */
-rp_status_t rp_est_set_overlap(rp_est_t *est, void (*fn)(void *ctx), void *ctx);
 
 /* One frame set of features (sim source); out is always filled. rp_pipe_step_feats's status:
  * the estimator's step status; for rc the reference camera's, the fusion's degeneracy shows as

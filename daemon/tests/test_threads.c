@@ -2,16 +2,13 @@
  * test_threads.c - the daemon's threads (issue 17 item 1), built under ThreadSanitizer:
  *   - the pool (platform/src/rp_pool.c) runs every job of a batch exactly once, for batch
  *     sizes 0..40 on 1..5 threads and thousands of batches in a row; with one thread in
- *     order on the caller's; bad calls refused; stop and start again; a batch submitted and
- *     waited for later (rp_pool_submit / rp_pool_wait) likewise, a second batch or a stop
- *     waiting for the pending one;
+ *     order on the caller's; bad calls refused; stop and start again;
  *   - the default thread count (rp_est_threads_for): the online cores, at most one per
  *     tracker of the layout; the file's `threads:` wins;
  *   - the image path as the daemon runs it: a replay folder of rendered frames of the paper's
  *     rig (img_fixture.h, PGM) read by the HAL's replay source with each camera's image decoded
  *     in a job of the pool (rp_hal_cfg_t.run_jobs), then each camera's tracker in a job
- *     (rp_est_step_images), the next set's images decoded on the pool while the estimator
- *     runs (rp_hal_prefetch from rp_est_set_overlap's hook, as the daemon does): the estimates on 2, 3 and 4 threads are bit for bit those of one
+ *     (rp_est_step_images): the estimates on 2, 3 and 4 threads are bit for bit those of one
  *     thread, for stereo4 and gc; and they follow the rendered motion (the run is a real one).
  *     Each camera carries its own capture time (frames.csv's utime_us_<column>, CAM_DT_US
  *     apart), passed as the daemon passes it: the frame sets carry them on every thread count.
@@ -116,64 +113,6 @@ static void test_pool_refuses_bad_calls(void **state)
     assert_int_equal(b.hits[4], 1);
     rp_pool_stop(&pool);
     assert_true(rp_pool_online_cores() >= 1);
-}
-
-static void test_pool_submit_then_wait_runs_every_job_once(void **state)
-{
-    (void)state;
-    static rp_pool_t pool;
-    static jobs_t b, c;
-    for (unsigned n = 1; n <= 4; ++n) {
-        assert_ok(rp_pool_start(&pool, n));
-        for (unsigned rep = 0; rep < 200; ++rep) {
-            const unsigned k = rep % (MAX_JOBS + 1);
-            memset(&b, 0, sizeof b);
-            assert_ok(rp_pool_submit(&pool, k, count_job, &b));
-            assert_ok(rp_pool_wait(&pool));
-            assert_ok(rp_pool_wait(&pool)); /* nothing pending: at once */
-            for (unsigned j = 0; j < MAX_JOBS; ++j) {
-                assert_int_equal(b.hits[j], j < k ? 1u : 0u);
-            }
-            /* a batch submitted while one is pending: the pending one ends first */
-            memset(&b, 0, sizeof b);
-            memset(&c, 0, sizeof c);
-            assert_ok(rp_pool_submit(&pool, k, count_job, &b));
-            assert_ok(rp_pool_run(&pool, MAX_JOBS - k, count_job, &c));
-            for (unsigned j = 0; j < MAX_JOBS; ++j) {
-                assert_int_equal(b.hits[j], j < k ? 1u : 0u);
-                assert_int_equal(c.hits[j], j < MAX_JOBS - k ? 1u : 0u);
-            }
-        }
-        /* stopped with a batch pending: it runs to its end */
-        memset(&b, 0, sizeof b);
-        assert_ok(rp_pool_submit(&pool, 9, count_job, &b));
-        rp_pool_stop(&pool);
-        assert_int_equal(b.hits[8], 1);
-        assert_int_equal(b.hits[9], 0);
-    }
-}
-
-static void test_pool_single_thread_submit_runs_in_wait_in_order(void **state)
-{
-    (void)state;
-    static rp_pool_t pool;
-    static jobs_t b;
-    assert_ok(rp_pool_start(&pool, 1));
-    memset(&b, 0, sizeof b);
-    b.caller = pthread_self();
-    assert_ok(rp_pool_submit(&pool, 5, order_job, &b));
-    assert_int_equal(b.n_order, 0); /* no worker: nothing ran yet */
-    assert_ok(rp_pool_wait(&pool));
-    assert_int_equal(b.n_order, 5);
-    assert_int_equal(b.on_caller, 5);
-    for (unsigned j = 0; j < 5; ++j) {
-        assert_int_equal(b.order[j], j);
-    }
-    assert_int_equal(rp_pool_submit(&pool, 3, NULL, &b), RP_E_ARG);
-    assert_int_equal(rp_pool_submit(NULL, 3, order_job, &b), RP_E_ARG);
-    assert_int_equal(rp_pool_wait(NULL), RP_E_ARG);
-    rp_pool_stop(&pool);
-    assert_int_equal(rp_pool_wait(&pool), RP_E_ARG); /* not started */
 }
 
 /* ---- the default thread count ------------------------------------------------------------------ */
@@ -333,28 +272,6 @@ static void replay_cfg(rp_pipe_layout_t layout, unsigned threads)
     g_cfg.threads = (uint8_t)threads;
 }
 
-/* The daemon's overlap hook (rigpose.c): the next set read while the estimator runs. */
-static unsigned g_prefetches;
-
-static void prefetch_next(void *ctx)
-{
-    assert_int_equal(rp_hal_prefetch((rp_hal_source_t *)ctx), RP_HAL_OK);
-    g_prefetches++;
-}
-
-/* FNV-1a over the set's images: what a caller still reading them after the step would see. */
-static uint32_t set_hash(const rp_hal_set_t *set)
-{
-    uint32_t h = 2166136261u;
-    for (uint8_t k = 0; k < set->n_cams; ++k) {
-        const rp_image_t *im = &set->cam[k].img;
-        for (uint32_t i = 0; im->data != NULL && i < im->size; ++i) {
-            h = (h ^ im->data[i]) * 16777619u;
-        }
-    }
-    return h;
-}
-
 /* One run of the replay through the daemon's estimator on `threads` threads into out[]. */
 static void run_replay(rp_pipe_layout_t layout, unsigned threads, rp_estimate_t out[NFRAMES])
 {
@@ -364,15 +281,9 @@ static void run_replay(rp_pipe_layout_t layout, unsigned threads, rp_estimate_t 
     rp_hal_cfg_t hc = g_cfg.hal;
     hc.run_jobs = threads > 1 ? rp_est_hal_jobs : NULL; /* as the daemon does */
     hc.run_jobs_ctx = &g_est;
-    if (threads > 1) { /* the next set decoded while the estimator runs, as the daemon does */
-        hc.start_jobs = rp_est_hal_start_jobs;
-        hc.wait_jobs = rp_est_hal_wait_jobs;
-    }
     rp_hal_source_t *src = NULL;
     assert_int_equal(rp_hal_open(&src, &hc), RP_HAL_OK);
     assert_int_equal(rp_hal_start(src), RP_HAL_OK);
-    assert_ok(rp_est_set_overlap(&g_est, threads > 1 ? prefetch_next : NULL, src));
-    g_prefetches = 0;
     for (int j = 0; j < NFRAMES; ++j) {
         assert_int_equal(rp_hal_grab(src, &g_set), RP_HAL_OK);
         const rp_image_t *img[RP_MAX_CAMS];
@@ -382,15 +293,11 @@ static void run_replay(rp_pipe_layout_t layout, unsigned threads, rp_estimate_t 
                                                                       : NULL;
             cam_utime[k] = img[k] != NULL ? g_set.cam[k].utime : g_set.utime; /* the daemon's */
         }
-        const uint32_t h = set_hash(&g_set);
         memset(&out[j], 0, sizeof out[j]);
         const rp_frameset_t *fs = NULL;
         const rp_status_t st =
             rp_est_step_images(&g_est, img, cam_utime, g_set.n_cams, g_set.utime, &out[j], &fs);
         assert_true(st == RP_OK || st == RP_E_TOO_FEW);
-        /* the next set was prefetched during the step; this one's images are as grabbed */
-        assert_int_equal(g_prefetches, threads > 1 ? (unsigned)j + 1u : 0u);
-        assert_int_equal(set_hash(&g_set), h);
         assert_non_null(fs);
         assert_true(fs->utime == (int64_t)j * DT_US);
         for (int k = 0; k < RP_SIM_NCAMS; ++k) {
@@ -452,8 +359,6 @@ int main(void)
         cmocka_unit_test(test_pool_runs_every_job_once),
         cmocka_unit_test(test_pool_single_thread_runs_in_order_on_caller),
         cmocka_unit_test(test_pool_refuses_bad_calls),
-        cmocka_unit_test(test_pool_submit_then_wait_runs_every_job_once),
-        cmocka_unit_test(test_pool_single_thread_submit_runs_in_wait_in_order),
         cmocka_unit_test(test_default_threads_one_per_core_at_most_one_per_tracker),
         cmocka_unit_test_setup_teardown(test_stereo4_on_threads_identical_to_one, setup_replay,
                                         teardown_replay),

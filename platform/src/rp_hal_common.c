@@ -114,17 +114,6 @@ rp_hal_status_t rp_hal_grab(rp_hal_source_t *src, rp_hal_set_t *set)
     return src->ops->grab(src->ctx, set);
 }
 
-rp_hal_status_t rp_hal_prefetch(rp_hal_source_t *src)
-{
-    if (src == NULL || src->ops == NULL) {
-        return RP_HAL_E_ARG;
-    }
-    if (src->ops->prefetch != NULL) {
-        src->ops->prefetch(src->ctx);
-    }
-    return RP_HAL_OK;
-}
-
 rp_hal_status_t rp_hal_stop(rp_hal_source_t *src)
 {
     if (src == NULL || src->ops == NULL) {

@@ -19,7 +19,6 @@ typedef struct {
     rp_hal_status_t (*open)(void **ctx, const rp_hal_cfg_t *cfg, char *err);
     rp_hal_status_t (*start)(void *ctx);
     rp_hal_status_t (*grab)(void *ctx, rp_hal_set_t *set);
-    void (*prefetch)(void *ctx); /* optional (NULL: nothing): rp_hal_prefetch */
     rp_hal_status_t (*stop)(void *ctx);
     void (*close)(void *ctx);
 } rp_hal_ops_t;

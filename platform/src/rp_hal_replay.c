@@ -100,26 +100,8 @@ typedef struct {
     char time_name[RP_MAX_CAMS][RP_HAL_PATH_MAX]; /* header name of that time column */
     uint8_t col[RP_MAX_CAMS];    /* camera i's image column */
     uint16_t w[RP_MAX_CAMS], h[RP_MAX_CAMS];
-    /* The row being read (read_row, or started by replay_prefetch and finished by the next
-     * grab): its time, each camera's time, its index. */
-    int64_t row_u;
-    int64_t row_cam_u[RP_MAX_CAMS];
-    uint32_t row_idx;
-    /* rp_hal_prefetch: PF_NONE, PF_LOADING (the row parsed, its images loading in cfg.start_jobs
-     * jobs), PF_FAILED (the row refused: pf_st and pf_msg are the next grab's answer) */
-    uint8_t pf;
-    rp_hal_status_t pf_st;
-    char pf_msg[RP_HAL_ERR_MAX];
-    /* Two image buffers per camera (2 x RP_HAL_MAX_W x RP_HAL_MAX_H bytes): a prefetched row
-     * loads into the one the set last delivered does not use, which stays valid until the
-     * next grab; without prefetching every row loads into the same one. */
-    uint8_t bank;                /* the buffer the row being read loads into */
-    uint8_t grey[2][RP_MAX_CAMS][(size_t)RP_HAL_MAX_W * RP_HAL_MAX_H];
+    uint8_t grey[RP_MAX_CAMS][(size_t)RP_HAL_MAX_W * RP_HAL_MAX_H];
 } replay_src_t;
-
-enum { PF_NONE = 0, PF_LOADING, PF_FAILED };
-
-static void complete_prefetch(replay_src_t *s);
 
 static replay_src_t g_replay;
 
@@ -392,9 +374,9 @@ static rp_hal_status_t load_image(replay_src_t *s, uint8_t cam, const char *rel)
     const size_t got = fread(magic, 1, 4, f);
     rewind(f);
     if (got == 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') {
-        why = read_png(f, s->grey[s->bank][cam], &s->w[cam], &s->h[cam]);
+        why = read_png(f, s->grey[cam], &s->w[cam], &s->h[cam]);
     } else {
-        why = read_pgm(f, s->grey[s->bank][cam], &s->w[cam], &s->h[cam]);
+        why = read_pgm(f, s->grey[cam], &s->w[cam], &s->h[cam]);
     }
     fclose(f);
     if (why != NULL) {
@@ -421,7 +403,6 @@ static void load_job(void *arg, unsigned cam)
 static void replay_close(void *ctx)
 {
     replay_src_t *s = (replay_src_t *)ctx;
-    complete_prefetch(s); /* no job of ours may run past close */
     if (s->frames != NULL) {
         fclose(s->frames);
     }
@@ -622,7 +603,6 @@ static rp_hal_status_t replay_stop(void *ctx)
     if (!s->started) {
         return rp_hal_fail(s->err, RP_HAL_E_STATE, "replay: not started");
     }
-    complete_prefetch(s); /* its jobs end here; the row waits for a start and grab */
     s->started = 0;
     return RP_HAL_OK;
 }
@@ -683,13 +663,14 @@ static rp_hal_status_t cam_times(replay_src_t *s, char *f[], int64_t u, int64_t 
     return RP_HAL_OK;
 }
 
-/* Reads the next row of frames.csv (the one a live replay has not yet skipped) into row_u,
- * row_cam_u, row_idx and each camera's image path (rel). Failures name file and line. */
-static rp_hal_status_t parse_row(replay_src_t *s)
+/* Reads and loads the next row into the ready set (s->ready). */
+static rp_hal_status_t read_row(replay_src_t *s)
 {
     const uint8_t n = s->cfg.n_cams;
     char *f[MAX_FIELDS + 1];
     int64_t u = 0;
+    int64_t cam_u[RP_MAX_CAMS];
+    uint32_t row = 0;
     for (;;) {
         const int r = next_line(s->frames, s->buf, sizeof s->buf, &s->line);
         if (r == 0) {
@@ -720,37 +701,32 @@ static rp_hal_status_t parse_row(replay_src_t *s)
                                "%s:%u: utime_us %" PRId64 " not after %" PRId64, s->index,
                                (unsigned)s->line, u, s->last_u);
         }
-        const rp_hal_status_t tst = cam_times(s, f, u, s->row_cam_u);
+        const rp_hal_status_t tst = cam_times(s, f, u, cam_u);
         if (tst != RP_HAL_OK) {
             return tst;
         }
         s->any_row = 1;
         s->last_u = u;
-        s->row_idx = s->row++;
+        row = s->row++;
         /* live: a set due more than timeout_ms ago is skipped here, its images never read */
         if (s->cfg.realtime != RP_HAL_PACE_LIVE ||
             sat_sub(rp_hal_now_us(), u) <= (int64_t)s->cfg.timeout_ms * 1000) {
             break;
         }
     }
-    s->row_u = u;
-    for (uint8_t i = 0; i < n; i++) {
-        s->rel[i] = f[s->img_field[s->col[i]]];
-    }
-    return RP_HAL_OK;
-}
-
-/* The parsed row's images loaded (load_st, load_err, grey[bank]): the row's outcome into the
- * ready set (s->ready), or the row's failure. */
-static rp_hal_status_t finish_row(replay_src_t *s)
-{
-    const uint8_t n = s->cfg.n_cams;
-    const int64_t u = s->row_u;
     /* Each camera's image; one that cannot be read leaves its camera MISSING in this set. */
     uint8_t ok[RP_MAX_CAMS];
     unsigned n_bad = 0;
     rp_hal_status_t first_bad = RP_HAL_OK;
     s->ready_msg[0] = '\0';
+    for (uint8_t i = 0; i < n; i++) {
+        s->rel[i] = f[s->img_field[s->col[i]]];
+    }
+    if (s->cfg.run_jobs == NULL || s->cfg.run_jobs(s->cfg.run_jobs_ctx, n, load_job, s) != 0) {
+        for (uint8_t i = 0; i < n; i++) {
+            load_job(s, i);
+        }
+    }
     for (uint8_t i = 0; i < n; i++) { /* in camera order: the first failure is the message */
         const rp_hal_status_t st = s->load_st[i];
         ok[i] = st == RP_HAL_OK;
@@ -777,7 +753,7 @@ static rp_hal_status_t finish_row(replay_src_t *s)
         /* ignored: it returns the status it was given: here only the message is wanted */
         (void)rp_hal_fail(s->ready_msg, RP_HAL_E_FORMAT,
                           "%s/truth.csv:%u: want utime_us and 6 numbers: row skipped, set %u "
-                          "has no truth", s->dir, (unsigned)s->tline, (unsigned)s->row_idx);
+                          "has no truth", s->dir, (unsigned)s->tline, (unsigned)row);
     }
     rp_hal_set_t *set = &s->ready;
     rp_hal_set_clear(set, n);
@@ -786,13 +762,13 @@ static rp_hal_status_t finish_row(replay_src_t *s)
             continue; /* MISSING, no image (rp_hal_set_clear) */
         }
         rp_hal_frame_t *fr = &set->cam[i];
-        fr->img.data = s->grey[s->bank][i];
+        fr->img.data = s->grey[i];
         fr->img.w = s->w[i];
         fr->img.h = s->h[i];
         fr->img.stride = s->w[i];
         fr->img.size = (uint32_t)s->w[i] * s->h[i];
-        fr->utime = s->row_cam_u[i];
-        fr->seq = s->row_idx;
+        fr->utime = cam_u[i];
+        fr->seq = row;
         fr->flags = RP_HAL_CAM_OK;
     }
     set->utime = u;
@@ -804,67 +780,6 @@ static rp_hal_status_t finish_row(replay_src_t *s)
     return RP_HAL_OK;
 }
 
-/* Reads and loads the next row into the ready set (s->ready), each camera's image in a job of
- * cfg.run_jobs if given. */
-static rp_hal_status_t read_row(replay_src_t *s)
-{
-    const uint8_t n = s->cfg.n_cams;
-    const rp_hal_status_t st = parse_row(s);
-    if (st != RP_HAL_OK) {
-        return st;
-    }
-    if (s->cfg.run_jobs == NULL || s->cfg.run_jobs(s->cfg.run_jobs_ctx, n, load_job, s) != 0) {
-        for (uint8_t i = 0; i < n; i++) {
-            load_job(s, i);
-        }
-    }
-    return finish_row(s);
-}
-
-/* rp_hal_prefetch: the next row parsed now and its images loading in cfg.start_jobs jobs into
- * the other buffer, while the caller still holds the set last delivered; the next grab
- * finishes it (complete_prefetch). The source's message (s->err) is the last grab's until
- * then: the row's failure waits in pf_msg. */
-static void replay_prefetch(void *ctx)
-{
-    replay_src_t *s = (replay_src_t *)ctx;
-    if (!s->started || s->have_ready || s->pf != PF_NONE || s->cfg.start_jobs == NULL ||
-        s->cfg.wait_jobs == NULL) {
-        return;
-    }
-    char *const err = s->err;
-    s->err = s->pf_msg;
-    s->pf_st = parse_row(s);
-    s->err = err;
-    if (s->pf_st != RP_HAL_OK) {
-        s->pf = PF_FAILED;
-        return;
-    }
-    s->bank ^= 1u;
-    if (s->cfg.start_jobs(s->cfg.run_jobs_ctx, s->cfg.n_cams, load_job, s) != 0) {
-        for (uint8_t i = 0; i < s->cfg.n_cams; i++) {
-            load_job(s, i);
-        }
-    }
-    s->pf = PF_LOADING;
-}
-
-/* A prefetched row's images waited for and the row finished: into the ready set, or its
- * failure kept for the next grab (PF_FAILED). */
-static void complete_prefetch(replay_src_t *s)
-{
-    if (s->pf != PF_LOADING) {
-        return;
-    }
-    /* ignored: the daemon's wait cannot fail for a batch it started (rp_pool_wait) */
-    (void)s->cfg.wait_jobs(s->cfg.run_jobs_ctx);
-    char *const err = s->err;
-    s->err = s->pf_msg;
-    s->pf_st = finish_row(s);
-    s->err = err;
-    s->pf = s->pf_st == RP_HAL_OK ? PF_NONE : PF_FAILED;
-}
-
 static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
 {
     replay_src_t *s = (replay_src_t *)ctx;
@@ -872,12 +787,6 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
         return rp_hal_fail(s->err, RP_HAL_E_STATE, "replay: grab before start");
     }
     rp_hal_set_clear(set, s->cfg.n_cams);
-    complete_prefetch(s);
-    if (s->pf == PF_FAILED) { /* the prefetched row's failure, as read_row would have said */
-        s->pf = PF_NONE;
-        memcpy(s->err, s->pf_msg, RP_HAL_ERR_MAX);
-        return s->pf_st;
-    }
     if (!s->have_ready) {
         const rp_hal_status_t st = read_row(s);
         if (st != RP_HAL_OK) {
@@ -923,5 +832,4 @@ static rp_hal_status_t replay_grab(void *ctx, rp_hal_set_t *set)
 
 const rp_hal_ops_t rp_hal_replay_ops = {
     .name = "replay", .payload = RP_HAL_PAYLOAD_IMAGES, .open = replay_open,
-    .start = replay_start, .grab = replay_grab, .prefetch = replay_prefetch,
-    .stop = replay_stop, .close = replay_close};
+    .start = replay_start, .grab = replay_grab, .stop = replay_stop, .close = replay_close};

@@ -4,8 +4,7 @@
  * One mutex guards the batch: which jobs are handed out (next), how many returned (finished)
  * and the batch counter the workers wait on. A job runs outside the mutex; taking and
  * returning a job are the only locked steps, a few per job (jobs are a camera's front end,
- * milliseconds each). `pending` (a batch submitted and not yet waited for) is the caller's
- * alone: only rp_pool_submit / rp_pool_wait / rp_pool_stop, on the caller's thread, touch it.
+ * milliseconds each).
  */
 #include "rigpose/rp_pool.h"
 
@@ -78,18 +77,15 @@ rp_status_t rp_pool_start(rp_pool_t *pool, unsigned n_threads)
     return RP_OK;
 }
 
-rp_status_t rp_pool_submit(rp_pool_t *pool, unsigned n_jobs, rp_pool_fn_t fn, void *arg)
+rp_status_t rp_pool_run(rp_pool_t *pool, unsigned n_jobs, rp_pool_fn_t fn, void *arg)
 {
     if (pool == NULL || fn == NULL || pool->started != 1) {
         return RP_E_ARG;
     }
-    /* ignored: the pool is started: RP_OK (one batch at a time: the pending one ends first) */
-    (void)rp_pool_wait(pool);
-    if (pool->n_workers == 0) { /* the single-threaded pool: the jobs run in rp_pool_wait */
-        pool->fn = fn;
-        pool->arg = arg;
-        pool->n_jobs = n_jobs;
-        pool->pending = 1;
+    if (pool->n_workers == 0) { /* in order, on this thread: the single-threaded run */
+        for (unsigned j = 0; j < n_jobs; ++j) {
+            fn(arg, j);
+        }
         return RP_OK;
     }
     pthread_mutex_lock(&pool->mu);
@@ -100,39 +96,12 @@ rp_status_t rp_pool_submit(rp_pool_t *pool, unsigned n_jobs, rp_pool_fn_t fn, vo
     pool->finished = 0;
     pool->batch++;
     pthread_cond_broadcast(&pool->go);
-    pthread_mutex_unlock(&pool->mu);
-    pool->pending = 1;
-    return RP_OK;
-}
-
-rp_status_t rp_pool_wait(rp_pool_t *pool)
-{
-    if (pool == NULL || pool->started != 1) {
-        return RP_E_ARG;
-    }
-    if (!pool->pending) {
-        return RP_OK;
-    }
-    pool->pending = 0;
-    if (pool->n_workers == 0) { /* in order, on this thread: the single-threaded run */
-        for (unsigned j = 0; j < pool->n_jobs; ++j) {
-            pool->fn(pool->arg, j);
-        }
-        return RP_OK;
-    }
-    pthread_mutex_lock(&pool->mu);
     drain(pool);
     while (pool->finished < pool->n_jobs) {
         pthread_cond_wait(&pool->done, &pool->mu);
     }
     pthread_mutex_unlock(&pool->mu);
     return RP_OK;
-}
-
-rp_status_t rp_pool_run(rp_pool_t *pool, unsigned n_jobs, rp_pool_fn_t fn, void *arg)
-{
-    const rp_status_t st = rp_pool_submit(pool, n_jobs, fn, arg);
-    return st == RP_OK ? rp_pool_wait(pool) : st;
 }
 
 unsigned rp_pool_threads(const rp_pool_t *pool)
@@ -145,8 +114,6 @@ void rp_pool_stop(rp_pool_t *pool)
     if (pool == NULL || pool->started != 1) {
         return;
     }
-    /* ignored: the pool is started: RP_OK (a pending batch runs to its end first) */
-    (void)rp_pool_wait(pool);
     pthread_mutex_lock(&pool->mu);
     pool->quit = 1;
     pthread_cond_broadcast(&pool->go);

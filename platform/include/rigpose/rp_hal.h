@@ -99,10 +99,6 @@ typedef struct {
  * thread). */
 typedef int (*rp_hal_jobs_fn_t)(void *ctx, unsigned n_jobs, void (*fn)(void *arg, unsigned job),
                                 void *arg);
-/* The same jobs in two halves, for rp_hal_prefetch (the daemon's rp_pool_submit / rp_pool_wait):
- * start_jobs hands the jobs out and returns at once (0), or fails having started none
- * (non-zero); wait_jobs returns once every job started has returned (0). */
-typedef int (*rp_hal_jobs_wait_fn_t)(void *ctx);
 
 typedef struct {
     rp_hal_kind_t kind;
@@ -125,9 +121,7 @@ typedef struct {
                                              * (rp_hal_sim.h); NULL: the protocol's defaults.
                                              * Read by rp_hal_open only */
     rp_hal_jobs_fn_t run_jobs;           /* optional: how to run one job per camera (below) */
-    void *run_jobs_ctx;                  /* ctx of run_jobs, start_jobs and wait_jobs */
-    rp_hal_jobs_fn_t start_jobs;         /* optional, both or neither: rp_hal_prefetch's jobs */
-    rp_hal_jobs_wait_fn_t wait_jobs;
+    void *run_jobs_ctx;
 } rp_hal_cfg_t;
 
 /* Per-camera state in one set. */
@@ -169,15 +163,6 @@ rp_hal_status_t rp_hal_start(rp_hal_source_t *src);
 /* Blocks until a synchronised set is ready or timeout_ms passes. On RP_HAL_E_TIMEOUT the set
  * still describes which cameras were missing. */
 rp_hal_status_t rp_hal_grab(rp_hal_source_t *src, rp_hal_set_t *set);
-/* Starts reading the next set now, in jobs that run while the caller does something else
- * (cfg.start_jobs), so that the next rp_hal_grab finds it read or being read and only waits for
- * the rest (cfg.wait_jobs). The set last grabbed, its images included, stays valid until that
- * grab; the next grab delivers what it would have delivered without the prefetch (the same
- * set, or the same failure with the same message), paced as it would have been. replay: the
- * next row of frames.csv, its images decoded into the second of two buffers per camera;
- * v4l2, sim, or no start_jobs / wait_jobs in the configuration: nothing. RP_HAL_OK, or
- * RP_HAL_E_ARG for a NULL source. Call it between two grabs of a started source. */
-rp_hal_status_t rp_hal_prefetch(rp_hal_source_t *src);
 rp_hal_status_t rp_hal_stop(rp_hal_source_t *src);
 void rp_hal_close(rp_hal_source_t *src);
 

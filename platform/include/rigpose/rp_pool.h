@@ -6,24 +6,17 @@
  *   rp_pool_start(&pool, n)        n threads in all: the caller and n - 1 workers created now
  *   rp_pool_run(&pool, k, fn, arg) fn(arg, 0) .. fn(arg, k - 1), each exactly once, spread over
  *                                  the caller and the workers; returns when all have returned
- *   rp_pool_submit(&pool, k, fn, arg), later rp_pool_wait(&pool)
- *                                  the same batch in two halves: the workers start on it at
- *                                  once while the caller does something else, then the caller
- *                                  joins them on the jobs left and waits for the batch's end
  *   rp_pool_stop(&pool)            joins the workers
  *
  * A batch is handed out one job at a time (the next free job goes to the next free thread), so
  * a slow job does not hold back the others. Jobs of one batch must not touch each other's
  * memory; then the result is the same whatever thread ran what, and with n = 1 the jobs run in
- * order on the caller's thread (no thread is created; a submitted batch then runs in
- * rp_pool_wait). Everything a job writes is visible to the caller when rp_pool_run /
- * rp_pool_wait returns (a mutex orders it), and everything the caller wrote before
- * rp_pool_run / rp_pool_submit is visible to the jobs. Between rp_pool_submit and rp_pool_wait
- * the caller must not touch what the batch's jobs touch.
+ * order on the caller's thread (no thread is created). Everything a job writes is visible to
+ * the caller when rp_pool_run returns (a mutex orders it), and everything the caller wrote
+ * before rp_pool_run is visible to the jobs.
  *
  * No allocation after rp_pool_start (the threads' stacks are the only memory it takes), no
- * thread created or destroyed per batch. One caller at a time per pool, and one batch at a
- * time: rp_pool_run, rp_pool_submit and rp_pool_stop first wait for a batch still pending.
+ * thread created or destroyed per batch. One caller at a time per pool.
  */
 #ifndef RP_POOL_H
 #define RP_POOL_H
@@ -57,7 +50,6 @@ typedef struct {
     rp_pool_fn_t fn;
     void *arg;
     uint8_t quit;
-    uint8_t pending;                  /* a batch submitted, not yet waited for (the caller's) */
 } rp_pool_t;
 
 /* Starts a pool of n_threads threads in all (the caller is one of them; 1: no worker).
@@ -69,18 +61,10 @@ rp_status_t rp_pool_start(rp_pool_t *pool, unsigned n_threads);
  * at once). RP_E_ARG: NULL pool or fn, or the pool not started. */
 rp_status_t rp_pool_run(rp_pool_t *pool, unsigned n_jobs, rp_pool_fn_t fn, void *arg);
 
-/* rp_pool_run in two halves. rp_pool_submit hands out fn(arg, 0) .. fn(arg, n_jobs - 1) to the
- * workers and returns at once (after waiting for a batch still pending); rp_pool_wait runs the
- * jobs no worker has taken yet on the caller's thread and returns when every job has returned
- * (at once if no batch is pending). With no worker (a pool of 1 thread) the jobs all run in
- * rp_pool_wait, in order. RP_E_ARG: NULL pool or fn, or the pool not started. */
-rp_status_t rp_pool_submit(rp_pool_t *pool, unsigned n_jobs, rp_pool_fn_t fn, void *arg);
-rp_status_t rp_pool_wait(rp_pool_t *pool);
-
 /* Threads of the pool, the caller's included (0 if not started or NULL). */
 unsigned rp_pool_threads(const rp_pool_t *pool);
 
-/* Waits for a batch still pending, stops and joins the workers; the pool may be started again. NULL or not started: nothing. */
+/* Stops and joins the workers; the pool may be started again. NULL or not started: nothing. */
 void rp_pool_stop(rp_pool_t *pool);
 
 /* Cores online now (sysconf), at least 1. */

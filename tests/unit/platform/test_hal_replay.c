@@ -4,8 +4,7 @@
  * lines of any length (comments skipped whole, long rows refused naming file:line), FIFOs,
  * devices and folders listed as images refused without blocking, a missing image costing only
  * its camera, pacing at the ends of int64, control characters escaped in messages; each
- * camera's own capture time (utime_us_<column>) and its malformed values; the prefetch of the
- * next set (rp_hal_prefetch) changing none of what the grabs deliver.
+ * camera's own capture time (utime_us_<column>) and its malformed values.
  */
 #include <stdint.h>
 #include <stdlib.h>
@@ -662,155 +661,6 @@ static void test_replay_missing_image_one_camera(void **state)
     rp_hal_close(src);
 }
 
-/* rp_hal_cfg_t.start_jobs / wait_jobs for the prefetch test: the jobs run only when waited for
- * (as late as a pool may run them). */
-static struct {
-    unsigned n, started;
-    void (*fn)(void *arg, unsigned job);
-    void *arg;
-} g_jobs;
-
-static int defer_jobs(void *ctx, unsigned n_jobs, void (*fn)(void *arg, unsigned job), void *arg)
-{
-    (void)ctx;
-    assert_null(g_jobs.fn); /* one batch at a time */
-    g_jobs.n = n_jobs;
-    g_jobs.fn = fn;
-    g_jobs.arg = arg;
-    g_jobs.started++;
-    return 0;
-}
-
-static int run_deferred_jobs(void *ctx)
-{
-    (void)ctx;
-    for (unsigned j = 0; g_jobs.fn != NULL && j < g_jobs.n; ++j) {
-        g_jobs.fn(g_jobs.arg, j);
-    }
-    g_jobs.fn = NULL;
-    return 0;
-}
-
-/* What a grab gave: its status, message, times, flags, truth and pixels. */
-typedef struct {
-    rp_hal_status_t st;
-    char msg[320];
-    int64_t utime;
-    uint32_t seq, flags[2], hash;
-    uint8_t has_truth;
-} grab_rec_t;
-
-static grab_rec_t record(const rp_hal_source_t *src, rp_hal_status_t st, const rp_hal_set_t *set)
-{
-    grab_rec_t r;
-    memset(&r, 0, sizeof r);
-    r.st = st;
-    snprintf(r.msg, sizeof r.msg, "%s", rp_hal_errmsg(src));
-    r.utime = set->utime;
-    r.seq = set->seq;
-    r.has_truth = set->has_truth;
-    r.hash = 2166136261u;
-    for (int k = 0; k < 2; ++k) {
-        r.flags[k] = set->cam[k].flags;
-        for (uint32_t i = 0; set->cam[k].img.data != NULL && i < set->cam[k].img.size; ++i) {
-            r.hash = (r.hash ^ set->cam[k].img.data[i]) * 16777619u;
-        }
-    }
-    return r;
-}
-
-/* rp_hal_prefetch after every grab (its jobs run late, when the next grab waits) gives the
- * same sets, failures and messages as grabbing alone: rows with distinct images, a missing
- * image (a partial set), a short row, a row going back in time, a malformed truth row, the
- * end. The set in hand keeps its pixels while the next one loads; a prefetched row survives a
- * stop and start. */
-static void test_replay_prefetch_delivers_the_same_sets(void **state)
-{
-    (void)state;
-    for (int i = 0; i < 6; ++i) {
-        char name[32];
-        snprintf(name, sizeof name, "i%d.pgm", i % 10);
-        write_pgm(name, i, W, H);
-    }
-    write_file("frames.csv", "utime_us,cam0,cam1\n10,i0.pgm,i1.pgm\n20,i2.pgm,i3.pgm\n"
-                             "30,i4.pgm,gone.pgm\n40,i5.pgm\n50,i1.pgm,i0.pgm\n45,i0.pgm,i0.pgm\n"
-                             "60,i3.pgm,i2.pgm\n70,i5.pgm,i4.pgm\n");
-    write_file("truth.csv", "utime_us,tx,ty,tz,alpha,beta,gamma\n10,1,2,3,0,0,0\n"
-                            "20,1,2,3,0,0\n50,1,2,3,0,0,0\n");
-    enum { N_GRABS = 9 };
-    static grab_rec_t plain[N_GRABS], pre[N_GRABS];
-    rp_hal_source_t *src;
-    rp_hal_set_t set;
-    for (int run = 0; run < 2; ++run) {
-        rp_hal_cfg_t cfg = replay_cfg(2);
-        cfg.partial_sets = 1;
-        if (run == 1) {
-            cfg.start_jobs = defer_jobs;
-            cfg.wait_jobs = run_deferred_jobs;
-        }
-        memset(&g_jobs, 0, sizeof g_jobs);
-        assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
-        assert_int_equal(rp_hal_start(src), RP_HAL_OK);
-        for (int g = 0; g < N_GRABS; ++g) {
-            const rp_hal_status_t st = rp_hal_grab(src, &set);
-            (run == 0 ? plain : pre)[g] = record(src, st, &set);
-            if (run == 1) {
-                assert_int_equal(rp_hal_prefetch(src), RP_HAL_OK);
-                /* the next set's jobs run now, in the second buffers */
-                if (g_jobs.fn != NULL) {
-                    void (*fn)(void *arg, unsigned job) = g_jobs.fn;
-                    for (unsigned j = 0; j < g_jobs.n; ++j) {
-                        fn(g_jobs.arg, j);
-                    }
-                    g_jobs.n = 0; /* the grab's wait then finds nothing left */
-                }
-                const grab_rec_t again = record(src, st, &set);
-                assert_int_equal(again.hash, pre[g].hash); /* the set in hand is intact */
-                assert_string_equal(again.msg, pre[g].msg); /* the grab's message stays */
-            }
-        }
-        if (run == 1) { /* rows 20, 30, 50, 60, 70 loaded by a prefetch */
-            assert_true(g_jobs.started >= 5);
-        }
-        rp_hal_close(src);
-    }
-    for (int g = 0; g < N_GRABS; ++g) {
-        printf("grab %d: %s %s\n", g, rp_hal_status_str(plain[g].st), plain[g].msg);
-        assert_int_equal(pre[g].st, plain[g].st);
-        assert_string_equal(pre[g].msg, plain[g].msg);
-        assert_true(pre[g].utime == plain[g].utime);
-        assert_int_equal(pre[g].seq, plain[g].seq);
-        assert_int_equal(pre[g].flags[0], plain[g].flags[0]);
-        assert_int_equal(pre[g].flags[1], plain[g].flags[1]);
-        assert_int_equal(pre[g].has_truth, plain[g].has_truth);
-        assert_int_equal(pre[g].hash, plain[g].hash);
-    }
-    assert_int_equal(plain[2].flags[1], RP_HAL_CAM_MISSING); /* gone.pgm */
-    assert_int_equal(plain[3].st, RP_HAL_E_FORMAT);          /* the short row */
-    assert_int_equal(plain[5].st, RP_HAL_E_FORMAT);          /* 45 after 50 */
-    assert_int_equal(plain[N_GRABS - 1].st, RP_HAL_E_END);
-
-    /* a prefetched row waits through a stop and start for the next grab */
-    rp_hal_cfg_t cfg = replay_cfg(2);
-    cfg.start_jobs = defer_jobs;
-    cfg.wait_jobs = run_deferred_jobs;
-    memset(&g_jobs, 0, sizeof g_jobs);
-    assert_int_equal(rp_hal_open(&src, &cfg), RP_HAL_OK);
-    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
-    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
-    assert_int_equal(rp_hal_prefetch(src), RP_HAL_OK);
-    assert_non_null(g_jobs.fn);
-    assert_int_equal(rp_hal_stop(src), RP_HAL_OK);
-    assert_null(g_jobs.fn); /* stop waited for the jobs */
-    assert_int_equal(rp_hal_start(src), RP_HAL_OK);
-    assert_int_equal(rp_hal_grab(src, &set), RP_HAL_OK);
-    assert_true(set.utime == 20);
-    check_image(&set.cam[0], 2);
-    check_image(&set.cam[1], 3);
-    rp_hal_close(src);
-    assert_int_equal(rp_hal_prefetch(NULL), RP_HAL_E_ARG);
-}
-
 /* Per-camera capture times: utime_us_<column> columns, anywhere after utime_us, give each
  * camera's utime; a column without one (depth) is at the set's utime_us, which stays set.utime.
  * Differences of -2^31 and 2^31 - 1 us are taken. With partial_sets a camera whose image cannot
@@ -1066,8 +916,6 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_replay_missing_image_one_camera, setup_dir,
                                         remove_dir),
         cmocka_unit_test_setup_teardown(test_replay_corrupted_index_never_crashes, setup_dir,
-                                        remove_dir),
-        cmocka_unit_test_setup_teardown(test_replay_prefetch_delivers_the_same_sets, setup_dir,
                                         remove_dir),
         cmocka_unit_test_setup_teardown(test_hal_dispatch, setup_dir, remove_dir),
     };
