@@ -40,6 +40,20 @@ rp_status_t rp_est_init(rp_est_t *est, const rp_config_t *cfg)
     if (st != RP_OK) {
         return st;
     }
+    for (uint8_t t = 0; t < RP_PIPE_MAX_TRACKERS; ++t) {
+        est->trk_pair[t] = -1;
+    }
+    for (uint8_t k = 0; k < rp_pipe_n_pairs(&est->pipe); ++k) {
+        uint8_t ta, tb;
+        /* ignored: k is a pair of the layout: RP_OK */
+        (void)rp_pipe_pair_trackers(&est->pipe, k, &ta, &tb);
+        est->trk_pair[ta] = (int8_t)k;
+        est->trk_pair[tb] = (int8_t)k;
+    }
+    if (pthread_mutex_init(&est->mu, NULL) != 0) {
+        return RP_E_FULL;
+    }
+    est->mu_ok = 1;
     return rp_pool_start(&est->pool, rp_est_threads_for(cfg, rp_pool_online_cores()));
 }
 
@@ -47,6 +61,10 @@ void rp_est_close(rp_est_t *est)
 {
     if (est != NULL) {
         rp_pool_stop(&est->pool);
+        if (est->mu_ok) {
+            pthread_mutex_destroy(&est->mu);
+            est->mu_ok = 0;
+        }
     }
 }
 
@@ -77,13 +95,28 @@ rp_status_t rp_est_step(rp_est_t *est, const rp_frameset_t *fs, rp_estimate_t *o
     return rp_pipe_step_feats(&est->pipe, fs, out);
 }
 
-/* Job j of a set: tracker order[j] on its camera's image. */
+/* Job j of a set: tracker order[j] on its camera's image; if that was the last of a stereo
+ * pair's two trackers to return, the pair's matching too (rp_pipe.h: a pair waits only for
+ * its own trackers), so no thread waits for a separate matching batch. */
 static void track_job(void *arg, unsigned j)
 {
     rp_est_t *est = (rp_est_t *)arg;
+    const uint8_t t = est->order[j];
     /* ignored: RP_E_ARG only for a step not begun or t out of range, which the caller rules
      * out; the tracker's own outcome is in the pipeline's report */
-    (void)rp_pipe_track(&est->pipe, est->order[j], est->images, est->n_images);
+    (void)rp_pipe_track(&est->pipe, t, est->images, est->n_images);
+    const int8_t k = est->trk_pair[t];
+    if (k < 0) {
+        return;
+    }
+    pthread_mutex_lock(&est->mu);
+    const uint8_t left = --est->pair_left[k];
+    pthread_mutex_unlock(&est->mu);
+    if (left == 0) {
+        /* ignored: RP_E_ARG only for a step not begun or k out of range, which the caller
+         * rules out; the matcher's counts are in the pipeline's report */
+        (void)rp_pipe_match_pair(&est->pipe, (uint8_t)k);
+    }
 }
 
 /* The trackers in the order their jobs are handed out: the one whose top-up turn it is (it
@@ -104,15 +137,6 @@ static uint8_t track_order(rp_est_t *est)
         }
     }
     return n;
-}
-
-/* Job k of a set: stereo pair k's matching of its new features. */
-static void match_job(void *arg, unsigned k)
-{
-    rp_est_t *est = (rp_est_t *)arg;
-    /* ignored: RP_E_ARG only for a step not begun or k out of range, which the caller rules
-     * out; the matcher's counts are in the pipeline's report */
-    (void)rp_pipe_match_pair(&est->pipe, (uint8_t)k);
 }
 
 /* What rp_pipe_step_timed checks before it begins (the phased path does the same): every
@@ -168,8 +192,10 @@ rp_status_t rp_est_step_images(rp_est_t *est, const rp_image_t *const images[],
         if (st == RP_OK) {
             est->images = images;
             est->n_images = n;
-            if (rp_pool_run(&est->pool, track_order(est), track_job, est) == RP_OK &&
-                rp_pool_run(&est->pool, rp_pipe_n_pairs(&est->pipe), match_job, est) == RP_OK) {
+            for (uint8_t k = 0; k < rp_pipe_n_pairs(&est->pipe); ++k) {
+                est->pair_left[k] = 2; /* the jobs see it: rp_pool_run orders it before them */
+            }
+            if (rp_pool_run(&est->pool, track_order(est), track_job, est) == RP_OK) {
                 /* ignored: RP_E_ARG only for a step not begun; rp_pipe_estimate then says so */
                 (void)rp_pipe_match(&est->pipe); /* every pair matched: the step moves on */
             }

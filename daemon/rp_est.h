@@ -5,15 +5,18 @@
  * the same layout's estimator (rp_est_step). One estimator dispatch for both: rp_pipe's.
  *
  * Threads (issue 17): a fixed pool (rp_pool.h) of cfg->threads threads, the caller's included,
- * started by rp_est_init. Each camera's tracker of a set is one job of the pool (rp_pipe_track),
- * then each stereo pair's matching (rp_pipe_match_pair); the estimator then runs on the
- * caller's thread. rp_est_hal_jobs lends the
+ * started by rp_est_init. Each camera's tracker of a set is one job of the pool (rp_pipe_track);
+ * the job that finishes the second tracker of a stereo pair then matches the pair
+ * (rp_pipe_match_pair) in the same job, while the other trackers still run; the estimator then
+ * runs on the caller's thread. rp_est_hal_jobs lends the
  * same pool to the HAL (rp_hal_cfg_t.run_jobs), so each camera's image is decoded in a job too.
  * The poses do not depend on the number of threads (rp_pipe.h: a tracker touches only its own
  * camera's state; the estimator's input is the same frame set in the same order).
  */
 #ifndef RP_EST_H
 #define RP_EST_H
+
+#include <pthread.h>
 
 #include "rigpose/rp_config.h"
 #include "rigpose/rp_frame.h"
@@ -26,6 +29,12 @@ typedef struct {
     const rp_image_t *const *images; /* the set being tracked (read by the jobs) */
     uint8_t order[RP_PIPE_MAX_TRACKERS]; /* trackers in the order their jobs go out */
     uint8_t n_images;
+    /* The set's stereo pairs (rp_pipe_pair_trackers): each tracker's pair (-1: none) and how
+     * many of each pair's two trackers are still to run (guarded by mu). */
+    int8_t trk_pair[RP_PIPE_MAX_TRACKERS];
+    uint8_t pair_left[RP_MAX_PAIRS];
+    pthread_mutex_t mu;
+    uint8_t mu_ok;
 } rp_est_t;
 
 /* Threads rp_est_init starts for cfg: cfg->threads, or for 0 the online cores, at most one

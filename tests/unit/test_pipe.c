@@ -476,8 +476,9 @@ static void test_bad_calls(void **state)
 
 /* The phased step (rp_pipe_begin, rp_pipe_track per tracker in any order, rp_pipe_match,
  * rp_pipe_estimate) is rp_pipe_step: stereo4 and gc on 6 frames with the trackers run last to
- * first give the same estimates, bit for bit, as rp_pipe_step; calls out of order are refused
- * and a step left unfinished is dropped by the next begin. */
+ * first, each stereo pair matched as soon as its two trackers have run (before the other
+ * pair's trackers), give the same estimates, bit for bit, as rp_pipe_step; calls out of order
+ * are refused and a step left unfinished is dropped by the next begin. */
 static rp_pipe_t pipe2;
 
 static void phased_step(rp_pipe_t *p, const rp_image_t *const ptr[], int64_t utime,
@@ -490,12 +491,19 @@ static void phased_step(rp_pipe_t *p, const rp_image_t *const ptr[], int64_t uti
     uint8_t turn_cam = 99;
     assert_ok(rp_pipe_tracker_cam(p, turn, &turn_cam));
     assert_true(turn_cam < 4); /* cam1..cam4: no pair's second camera (4, 5) */
+    uint8_t tracked[RP_PIPE_MAX_TRACKERS] = {0};
     for (int t = rp_pipe_n_trackers(p) - 1; t >= 0; --t) {
         assert_ok(rp_pipe_track(p, (uint8_t)t, ptr, NCAM));
-    }
-    for (int k = rp_pipe_n_pairs(p) - 1; k >= 0; --k) { /* pairs last to first, one twice */
-        assert_ok(rp_pipe_match_pair(p, (uint8_t)k));
-        assert_ok(rp_pipe_match_pair(p, (uint8_t)k));
+        tracked[t] = 1;
+        for (int k = rp_pipe_n_pairs(p) - 1; k >= 0; --k) { /* a pair whose two have run */
+            uint8_t ta = 99, tb = 99;
+            assert_ok(rp_pipe_pair_trackers(p, (uint8_t)k, &ta, &tb));
+            assert_true(ta < rp_pipe_n_trackers(p) && tb < rp_pipe_n_trackers(p) && ta != tb);
+            if ((t == ta || t == tb) && tracked[ta] && tracked[tb]) {
+                assert_ok(rp_pipe_match_pair(p, (uint8_t)k));
+                assert_ok(rp_pipe_match_pair(p, (uint8_t)k)); /* twice: once */
+            }
+        }
     }
     assert_ok(rp_pipe_match(p));
     const rp_frameset_t *fs;
@@ -571,6 +579,14 @@ static void test_phased_step_is_the_step(void **state)
     assert_int_equal(rp_pipe_n_trackers(NULL), 0);
     assert_status(rp_pipe_tracker_cam(&pipe2, 4, &cam), RP_E_ARG);
     assert_status(rp_pipe_tracker_cam(&pipe2, 0, NULL), RP_E_ARG);
+    uint8_t ta, tb;
+    assert_status(rp_pipe_pair_trackers(&pipe2, 0, &ta, &tb), RP_E_ARG); /* gc: no pairs */
+    assert_status(rp_pipe_pair_trackers(NULL, 0, &ta, &tb), RP_E_ARG);
+    init_both(RP_PIPE_STEREO4); /* pairs (cam1, cam1b) and (cam3, cam3b): trackers 0 1, 2 3 */
+    assert_ok(rp_pipe_pair_trackers(&pipe2, 1, &ta, &tb));
+    assert_true(ta == 2 && tb == 3);
+    assert_status(rp_pipe_pair_trackers(&pipe2, 2, &ta, &tb), RP_E_ARG);
+    assert_status(rp_pipe_pair_trackers(&pipe2, 0, NULL, &tb), RP_E_ARG);
 }
 
 /* Cameras with their own capture times (rp_pipe_step_timed, rp_pipe_cam_time). Given every

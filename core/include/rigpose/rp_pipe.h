@@ -249,8 +249,9 @@ rp_status_t rp_pipe_step_timed(rp_pipe_t *pipe, const rp_image_t *const images[]
  *   rp_pipe_match_pair for k = 0 .. rp_pipe_n_pairs - 1); rp_pipe_estimate
  * and the result does not depend on the order or the threads the rp_pipe_track calls run on:
  * tracker t reads and writes only its own tracker and its camera's entries of the frame set
- * and of the report, so the calls for distinct t may run concurrently (each t once per step,
- * all of them returned before any matching); so may rp_pipe_match_pair for distinct pairs.
+ * and of the report, so the calls for distinct t may run concurrently (each t once per step);
+ * so may rp_pipe_match_pair for distinct pairs, and a pair's matching with the trackers of the
+ * other cameras (it waits only for its own two: rp_pipe_pair_trackers).
  * Every other call, and every accessor, must not overlap any other call on the same pipe.
  *
  * rp_pipe_begin: checks and starts a step at utime. est may be NULL (a front end that does not
@@ -272,10 +273,11 @@ rp_status_t rp_pipe_step_timed(rp_pipe_t *pipe, const rp_image_t *const images[]
  * rp_pipe_match: stereo matching of the pairs' new features (stereo layouts; nothing for the
  *   others), of every pair not matched yet by rp_pipe_match_pair. After it rp_pipe_frameset
  *   holds the frame set the estimator will see. RP_E_ARG if no step is begun.
- * rp_pipe_match_pair: pair k's matching alone (k < rp_pipe_n_pairs), after every rp_pipe_track
- *   of the step has returned; calls for distinct k may run concurrently (a pair touches only its
- *   two cameras' trackers and entries, and its own matcher). RP_E_ARG: no step begun, not a
- *   stereo layout, k out of range. A pair matched twice in a step is matched once.
+ * rp_pipe_match_pair: pair k's matching alone (k < rp_pipe_n_pairs), after the rp_pipe_track
+ *   calls of its two trackers (rp_pipe_pair_trackers) have returned; it may run concurrently
+ *   with the other trackers' rp_pipe_track and the other pairs' matching (a pair touches only
+ *   its two cameras' trackers and entries, and its own matcher). RP_E_ARG: no step begun, not
+ *   a stereo layout, k out of range. A pair matched twice in a step is matched once.
  * rp_pipe_estimate: the layout's estimator on the frame set; returns as rp_pipe_step does, or
  *   RP_E_ARG (est NULL, or not matched) with est, if given, zeroed and LOST. */
 rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est);
@@ -296,6 +298,9 @@ uint8_t rp_pipe_topup_tracker(const rp_pipe_t *pipe);
 /* Stereo pairs of the layout (0 for the other layouts, NULL or not initialised). */
 uint8_t rp_pipe_n_pairs(const rp_pipe_t *pipe);
 rp_status_t rp_pipe_tracker_cam(const rp_pipe_t *pipe, uint8_t t, uint8_t *cam);
+/* The trackers of stereo pair k's first (*ta) and second (*tb) camera. RP_E_ARG: NULL, not
+ * initialised, not a stereo layout, k out of range. */
+rp_status_t rp_pipe_pair_trackers(const rp_pipe_t *pipe, uint8_t k, uint8_t *ta, uint8_t *tb);
 
 /* Feature-level input: run the layout's estimator on fs, a frame set of features built
  * elsewhere (rp_frame.h; ids shared between the cameras of a stereo pair), skipping the

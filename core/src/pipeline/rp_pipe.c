@@ -656,6 +656,16 @@ rp_status_t rp_pipe_tracker_cam(const rp_pipe_t *pipe, uint8_t t, uint8_t *cam)
     return RP_OK;
 }
 
+rp_status_t rp_pipe_pair_trackers(const rp_pipe_t *pipe, uint8_t k, uint8_t *ta, uint8_t *tb)
+{
+    if (ta == NULL || tb == NULL || k >= rp_pipe_n_pairs(pipe)) {
+        return RP_E_ARG;
+    }
+    *ta = (uint8_t)pipe->cam_trk[pipe->pair[k].a];
+    *tb = (uint8_t)pipe->cam_trk[pipe->pair[k].b];
+    return RP_OK;
+}
+
 rp_status_t rp_pipe_frameset(const rp_pipe_t *pipe, const rp_frameset_t **fs)
 {
     if (pipe == NULL || fs == NULL || pipe->magic != RP_PIPE_MAGIC) {
