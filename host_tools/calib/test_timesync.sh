@@ -16,6 +16,8 @@ set -u
 root=$(cd "$(dirname "$0")/../.." && pwd)
 rel=$root/build/release
 bin=${RP_TIMESYNC_BIN:-$rel/rigpose-timesync}
+# make exports a path relative to the repository; the runs below cd into their folders
+case $bin in /*) ;; *) bin=$root/$bin ;; esac
 data=${RIGPOSE_DATA:-$root/../shared/data}
 work=$(mktemp -d /tmp/rp_timesync_XXXXXX)
 trap 'rm -rf "$work"' EXIT
