@@ -75,17 +75,34 @@ typedef struct {
     uint8_t quarantine;             /* a landmark left out of the update in every camera is
                                      * dropped once this happens this many frames in a row
                                      * (0 or 1: at once) */
+    uint8_t retire_outliers;        /* 1: the track of a landmark dropped as an outlier is not
+                                     * triangulated again while it is tracked (below); 0: a
+                                     * re-initialisation takes every matched track */
 } rp_vo_stereo_cfg_t;
 
 /* Defaults: rp_ekf_default_params with plant noise q_trans = 3 m^2/s^3, q_rot = 3 rad^2/s^3
  * (config/README.md says why); the paper's threshold of 50, 1.5 px epipolar band,
  * 0.05..100 m, 1.5 px, 1/30 s, structure refinement on, rig RANSAC on, 1-point RANSAC on (its
- * cost: config/README.md), no quarantine.
+ * cost: config/README.md), no quarantine, outlier tracks retired.
  * No pairs (n_pairs = 0): the caller
  * (or rp_pipe_default_cfg) names them. */
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
 
 #define RP_VO_EMPTY_ID RP_IDMAP_EMPTY /* not a feature id */
+
+/* Retired tracks (cfg.retire_outliers). A KLT track follows one surface point, so a track whose
+ * landmark an update dropped as an outlier (a moving object, foliage, an occlusion edge) would
+ * bring the same wrong point back at the pair's next re-initialisation: a moving object that
+ * stays in view (one that moves with the rig) then refills the map every few frames. Such a
+ * track is retired: never triangulated again while its camera tracks it (its id leaves the list
+ * when the track is lost). Only an update that can judge tracks retires them: one whose inliers
+ * are most of the observations and, on a rig of several pairs, come from more than one pair
+ * (a consensus held by one pair alone may itself be the moving object). At most one retired
+ * track per feature slot of the pairs' first cameras. The front end keeps tracking a retired
+ * track: its place in the image stays taken, so the detector does not put a new feature on the
+ * same spot of the object (dropping them instead was measured worse: the object's freed area
+ * filled with new tracks that the next re-initialisation took in). */
+#define RP_VO_RETIRED_MAX (RP_MAX_PAIRS * RP_MAX_FEATS_PER_CAM)
 
 typedef struct {
     const rp_rig_t *rig;
@@ -105,6 +122,9 @@ typedef struct {
     uint8_t keep[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];/* scratch: obs[i]'s landmark is kept */
     uint8_t strikes[RP_IDMAP_MAX_SLOTS]; /* per landmark slot: frames in a row left out */
     uint8_t seen[RP_IDMAP_MAX_SLOTS];    /* scratch of quarantine() */
+    uint32_t retired_id[RP_VO_RETIRED_MAX]; /* retired tracks (above), oldest first */
+    uint8_t retired_pair[RP_VO_RETIRED_MAX]; /*   and the pair each belongs to */
+    uint16_t n_retired;
     rp_lmtab_t lm;                      /* landmarks: world points (m); group = the pair that
                                          * triangulated it; mark = observed (and not gated)
                                          * in the current frame */

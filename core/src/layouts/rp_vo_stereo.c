@@ -29,6 +29,7 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.ransac = 1;
     c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
     c.quarantine = 0; /* config/README.md: 3 helps i.i.d. outliers, costs on real clips */
+    c.retire_outliers = 1; /* rp_vo_stereo.h: a track that lied once is not believed again */
     return c;
 }
 
@@ -53,7 +54,8 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
         !(cfg->max_epipolar_px > RP_C(0.0)) || !(cfg->min_depth_m > RP_C(0.0)) ||
         !(cfg->max_depth_m > cfg->min_depth_m) || !(cfg->max_reproj_px > RP_C(0.0)) ||
         !(cfg->max_pair_skew_s >= RP_C(0.0)) || !rp_finite(cfg->max_pair_skew_s) ||
-        !(cfg->default_dt_s > RP_C(0.0)) || cfg->ransac > 1 || cfg->one_point > 1) {
+        !(cfg->default_dt_s > RP_C(0.0)) || cfg->ransac > 1 || cfg->one_point > 1 ||
+        cfg->retire_outliers > 1) {
         return RP_E_ARG;
     }
     uint8_t in_use[RP_MAX_CAMS] = {0};
@@ -84,6 +86,7 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
     }
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
+    vo->n_retired = 0;
     /* ignored: only NULL arguments fail */
     (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
     (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
@@ -135,6 +138,91 @@ static int tracked_in(const rp_frameset_t *fs, const rp_stereo_pair_t *sp, uint3
     return 0;
 }
 
+/* ---- retired tracks (rp_vo_stereo.h) ----------------------------------------------------- */
+
+/* Pair of camera cam in the layout; n_pairs if none. */
+static uint8_t pair_of_cam(const rp_vo_stereo_t *vo, uint8_t cam)
+{
+    uint8_t k = 0;
+    while (k < vo->cfg.n_pairs && vo->pair[k].a != cam && vo->pair[k].b != cam) {
+        ++k;
+    }
+    return k;
+}
+
+/* 1 if id is a retired track. */
+static int retired(const rp_vo_stereo_t *vo, uint32_t id)
+{
+    for (uint16_t i = 0; i < vo->n_retired; ++i) {
+        if (vo->retired_id[i] == id) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Keep the retired tracks that pair k's first camera still tracks in fs (ids are not reused). */
+static void retired_prune(rp_vo_stereo_t *vo, const rp_frameset_t *fs)
+{
+    uint16_t kept = 0;
+    for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+        if (fs->cam_flags[vo->pair[k].a] & RP_FS_NO_IMAGE) {
+            /* no image this set: its tracks wait for the next one */
+            for (uint16_t i = 0; i < vo->n_retired; ++i) {
+                if (vo->retired_pair[i] == k) {
+                    vo->retired_id[kept] = vo->retired_id[i];
+                    vo->retired_pair[kept++] = k;
+                }
+            }
+            continue;
+        }
+        match_map_build(vo, fs, vo->pair[k].a);
+        for (uint16_t i = 0; i < vo->n_retired; ++i) {
+            uint16_t idx;
+            if (vo->retired_pair[i] == k && match_map_find(vo, vo->retired_id[i], &idx)) {
+                vo->retired_id[kept] = vo->retired_id[i];
+                vo->retired_pair[kept++] = k;
+            }
+        }
+    }
+    vo->n_retired = kept;
+}
+
+/* Retire the tracks of the n observations' landmarks that the last drop removed, if the update
+ * could judge them (rp_vo_stereo.h): its inliers most of the n and from more than one pair when
+ * the layout has several. The oldest retired track makes room when the list is full. */
+static void retire_dropped(rp_vo_stereo_t *vo, uint32_t n)
+{
+    uint32_t n_used = 0;
+    uint32_t pairs_used = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (vo->used[i]) {
+            n_used++;
+            pairs_used |= 1u << pair_of_cam(vo, vo->obs[i].cam);
+        }
+    }
+    const int several = pairs_used & (pairs_used - 1u);
+    if (!vo->cfg.retire_outliers || 2u * n_used <= n || (vo->cfg.n_pairs > 1 && !several)) {
+        return;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t id = vo->obs_id[i];
+        const uint8_t k = pair_of_cam(vo, vo->obs[i].cam);
+        if (k >= vo->cfg.n_pairs || vo->obs[i].cam != vo->pair[k].a || lm_held(vo, id) ||
+            retired(vo, id)) {
+            continue;
+        }
+        if (vo->n_retired == RP_VO_RETIRED_MAX) {
+            memmove(vo->retired_id, vo->retired_id + 1,
+                    (RP_VO_RETIRED_MAX - 1u) * sizeof(vo->retired_id[0]));
+            memmove(vo->retired_pair, vo->retired_pair + 1, RP_VO_RETIRED_MAX - 1u);
+            vo->n_retired--;
+        }
+        vo->retired_id[vo->n_retired] = id;
+        vo->retired_pair[vo->n_retired++] = k;
+    }
+}
+
 /* Triangulate the matches of pair k in frame set fs at pose p and add them as landmarks.
  * If `only_in` is given, a match is used only when its id is also in that frame set (a
  * backtracked re-initialisation only wants features still tracked now). Returns how many
@@ -165,7 +253,7 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
         const rp_feat_t *fa = &fs->f[sp->a][f];
         uint16_t jb;
         if (fa->id == RP_VO_EMPTY_ID || !match_map_find(vo, fa->id, &jb) ||
-            lm_held(vo, fa->id)) {
+            lm_held(vo, fa->id) || retired(vo, fa->id)) {
             continue;
         }
         const rp_feat_t *fb = &fs->f[sp->b][jb];
@@ -411,16 +499,6 @@ static rp_status_t start_with_lowe(rp_vo_stereo_t *vo, uint32_t n, rp_real dt)
     return rp_vo_ekf_from_pose(&vo->ekf, &vo->cfg.ekf, p, cov, vo->prev_p, dt);
 }
 
-/* Pair of camera cam in the layout; n_pairs if none. */
-static uint8_t pair_of_cam(const rp_vo_stereo_t *vo, uint8_t cam)
-{
-    uint8_t k = 0;
-    while (k < vo->cfg.n_pairs && vo->pair[k].a != cam && vo->pair[k].b != cam) {
-        ++k;
-    }
-    return k;
-}
-
 /* 1 if the last update gated most of some pair's observations (of a pair that offered at least
  * the EKF's minimum). Outlier tracks are independent events: a gate that rejects a whole pair
  * is judging the prior, not the features. */
@@ -587,6 +665,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         imaged |= (fs->cam_flags[vo->pair[k].a] & RP_FS_NO_IMAGE) ? 0u : (1u << k);
     }
 
+    retired_prune(vo, fs);
     /* Which landmarks are still tracked; lost ones are dropped. */
     uint32_t n = gather_obs(vo, fs);
     /* ignored: only NULL arguments fail */
@@ -661,6 +740,9 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         }
         /* ignored: only NULL arguments fail */
         (void)rp_lmtab_drop_unmarked(&vo->lm, n_gated > 0 ? imaged : 0u, NULL);
+        if (n_gated > 0) {
+            retire_dropped(vo, n);
+        }
     } else {
         flags |= RP_EST_LOST;
     }
