@@ -475,7 +475,8 @@ static void test_ransac_runs_are_deterministic(void **state)
 
 /* Feature-level simulation with 30 % gross outliers (uniform pixels, drawn anew every frame) in
  * every camera at every frame. The issue's target is 1.5x the clean figure in every component;
- * not reached. Measured (2 runs x 60 frames): with rig and 1-point RANSAC 2.3-3.9x, also with
+ * not reached. Measured (2 runs x 60 frames): with rig and 1-point RANSAC 2.2-4.3x (1.6-3.4x
+ * with retire_outliers off: it retires sound tracks that read wrong once), also with
  * quarantine = 3
  * 1.5-1.9x (an outlier drawn anew every frame says nothing about its track, which a dropped
  * landmark wastes; real clips score worse with it, config/README.md, so it is not a default);
@@ -516,7 +517,7 @@ static void test_thirty_percent_gross_outliers_everywhere(void **state)
     for (int i = 0; i < 6; ++i) assert_true(dirty[3][i] > 2.5 * clean[i]); /* it can fail */
 }
 
-/* A moving object carried alongside the rig in front of the front pair: 70 % of the points
+/* A moving object carried alongside the rig in front of the front pair: 40 % of the points
  * cam1 and cam1b see belong to it; each sits at the pixel where the camera first saw it and
  * drifts from there by (1.5, -1) px per frame in both cameras (the object moving across the
  * view at a constant depth, with the front camera), so its stereo triangulation is consistent
@@ -541,7 +542,7 @@ static void comoving_object(rp_frameset_t *fs, uint32_t j)
             uint32_t k = 0;
             while (k < g_obj_n && g_obj_id[k] != f->id) ++k;
             if (k == g_obj_n) {
-                if (g_obj_n == OBJ_MAX) continue;
+                assert_true(g_obj_n < OBJ_MAX); /* every object point is the object's */
                 g_obj_id[g_obj_n++] = f->id;
                 g_obj_seen[k][0] = g_obj_seen[k][1] = 0;
             }
@@ -558,12 +559,21 @@ static void comoving_object(rp_frameset_t *fs, uint32_t j)
     }
 }
 
+/* Largest ratio of err to clean over the six components. */
+static double worst_ratio(const double err[6], const double clean[6])
+{
+    double w = 0.0;
+    for (int i = 0; i < 6; ++i) w = fmax(w, err[i] / clean[i]);
+    return w;
+}
+
 /* The co-moving object above, stereo4, 3 runs x 60 frames, with the re-initialisation threshold
  * raised to 200 landmarks so that the front pair, left with the static 60 % of its 255 after the
  * object's are dropped, re-initialises every frame (as a real camera's fewer tracks do): with
  * outlier tracks retired (rp_vo_stereo.h) the object's tracks, once rejected, stay out of the
- * map; without, every re-initialisation brings them back. The test pins retiring within 2x of
- * the clean figures in every component and better than not retiring in the worst (printed). */
+ * map; without, every re-initialisation brings them back. Measured: retired 1.1-1.6x the clean
+ * figures, not retired 5-34x in its worst component (by build). The test pins retired within 2x
+ * in every component, no frame lost, and not retiring at least twice as far off in the worst. */
 static void test_comoving_object_tracks_are_retired(void **state)
 {
     (void)state;
@@ -582,7 +592,8 @@ static void test_comoving_object_tracks_are_retired(void **state)
             rp_vo_stereo_cfg_t cfg = def;
             cfg.retire_outliers = (uint8_t)(m == 0);
             g_obj_n = 0;
-            (void)run_sequence(fx, &cfg, frames, comoving_object, err, &flags);
+            const uint32_t lost = run_sequence(fx, &cfg, frames, comoving_object, err, &flags);
+            if (m == 0) assert_int_equal(lost, 0);
             for (int i = 0; i < 6; ++i) dirty[m][i] += err[i] / runs;
         }
         simfx_free(fx);
@@ -591,7 +602,7 @@ static void test_comoving_object_tracks_are_retired(void **state)
     simfx_print_err("stereo4, co-moving object, tracks retired", dirty[0]);
     simfx_print_err("  not retired", dirty[1]);
     for (int i = 0; i < 6; ++i) assert_true(dirty[0][i] <= 2.0 * clean[i]);
-    assert_true(worst_of(dirty[1]) > worst_of(dirty[0])); /* it can fail */
+    assert_true(worst_ratio(dirty[1], clean) > 2.0 * worst_ratio(dirty[0], clean));
 }
 
 static void test_malformed_frameset_is_rejected_without_damage(void **state)

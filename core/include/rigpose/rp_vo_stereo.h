@@ -94,15 +94,22 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
  * landmark an update dropped as an outlier (a moving object, foliage, an occlusion edge) would
  * bring the same wrong point back at the pair's next re-initialisation: a moving object that
  * stays in view (one that moves with the rig) then refills the map every few frames. Such a
- * track is retired: never triangulated again while its camera tracks it (its id leaves the list
- * when the track is lost). Only an update that can judge tracks retires them: one whose inliers
- * are most of the observations and, on a rig of several pairs, come from more than one pair
- * (a consensus held by one pair alone may itself be the moving object). At most one retired
- * track per feature slot of the pairs' first cameras. The front end keeps tracking a retired
+ * track is retired: never triangulated again while either camera of its pair tracks it (its id
+ * leaves the list when both have lost it; a camera without features in a set, no image or a
+ * blank one, loses nothing). Only an update that can judge tracks retires them: one whose
+ * inliers are most of the observations, that left no pair mostly out (that judges the
+ * prediction, not the tracks: rp_vo_stereo.c, pair_rejected) unless the rig RANSAC re-find it
+ * then runs found no larger consensus (a moving object that fills most of one pair's view) and,
+ * on a rig of several pairs,
+ * whose inliers come from more than one pair (a consensus held by one pair alone may itself be
+ * the moving object). The list holds RP_VO_RETIRED_MAX ids (when full, the first listed makes
+ * room), found through a hash of twice that many cells. The front end keeps tracking a retired
  * track: its place in the image stays taken, so the detector does not put a new feature on the
  * same spot of the object (dropping them instead was measured worse: the object's freed area
  * filled with new tracks that the next re-initialisation took in). */
 #define RP_VO_RETIRED_MAX (RP_MAX_PAIRS * RP_MAX_FEATS_PER_CAM)
+#define RP_VO_RETIRED_CELLS (2u * RP_VO_RETIRED_MAX)
+RP_STATIC_ASSERT(RP_VO_RETIRED_CELLS <= 65535, "retired tracks are counted in uint16_t");
 
 typedef struct {
     const rp_rig_t *rig;
@@ -113,6 +120,8 @@ typedef struct {
     uint32_t n_retried;                 /* updates redone because the gate rejected most of a
                                          * pair or of all (rp_vo_stereo.c, predict_update) */
     uint32_t n_refound;                 /* of those, poses re-found by rig RANSAC */
+    uint32_t refind_inl;                /* this step: rig RANSAC's inliers when the re-find
+                                         * ran and found a pose, else 0 */
     uint8_t skewed;                     /* this step: a pair refused (max_pair_skew_s) */
     uint8_t start_near;                 /* first frame set: a pair was at the state's time
                                          * (RP_VO_START_SKEW_S) */
@@ -122,9 +131,11 @@ typedef struct {
     uint8_t keep[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];/* scratch: obs[i]'s landmark is kept */
     uint8_t strikes[RP_IDMAP_MAX_SLOTS]; /* per landmark slot: frames in a row left out */
     uint8_t seen[RP_IDMAP_MAX_SLOTS];    /* scratch of quarantine() */
-    uint32_t retired_id[RP_VO_RETIRED_MAX]; /* retired tracks (above), oldest first */
+    uint32_t retired_id[RP_VO_RETIRED_MAX]; /* retired tracks (above) */
     uint8_t retired_pair[RP_VO_RETIRED_MAX]; /*   and the pair each belongs to */
     uint16_t n_retired;
+    uint32_t retired_cell[RP_VO_RETIRED_CELLS]; /* their ids hashed (open addressing) */
+    uint8_t retired_keep[RP_VO_RETIRED_MAX]; /* scratch of the pruning */
     rp_lmtab_t lm;                      /* landmarks: world points (m); group = the pair that
                                          * triangulated it; mark = observed (and not gated)
                                          * in the current frame */

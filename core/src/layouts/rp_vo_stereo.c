@@ -42,6 +42,8 @@ static int lm_held(const rp_vo_stereo_t *vo, uint32_t id)
 
 /* ---- set-up ------------------------------------------------------------------------------ */
 
+static void retired_rehash(rp_vo_stereo_t *vo);
+
 rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
                               const rp_vo_stereo_cfg_t *cfg)
 {
@@ -87,6 +89,8 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
     vo->n_retired = 0;
+    vo->refind_inl = 0;
+    retired_rehash(vo);
     /* ignored: only NULL arguments fail */
     (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
     (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
@@ -153,44 +157,74 @@ static uint8_t pair_of_cam(const rp_vo_stereo_t *vo, uint8_t cam)
 /* 1 if id is a retired track. */
 static int retired(const rp_vo_stereo_t *vo, uint32_t id)
 {
-    for (uint16_t i = 0; i < vo->n_retired; ++i) {
-        if (vo->retired_id[i] == id) {
+    uint32_t i = rp_idmap_hash(id) % RP_VO_RETIRED_CELLS;
+    while (vo->retired_cell[i] != RP_VO_EMPTY_ID) {
+        if (vo->retired_cell[i] == id) {
             return 1;
         }
+        i = (i + 1u) % RP_VO_RETIRED_CELLS;
     }
     return 0;
 }
 
-/* Keep the retired tracks that pair k's first camera still tracks in fs (ids are not reused). */
+/* The hash of the retired ids, from the list (at most half its cells are taken). */
+static void retired_rehash(rp_vo_stereo_t *vo)
+{
+    for (uint32_t i = 0; i < RP_VO_RETIRED_CELLS; ++i) {
+        vo->retired_cell[i] = RP_VO_EMPTY_ID;
+    }
+    for (uint16_t k = 0; k < vo->n_retired; ++k) {
+        uint32_t i = rp_idmap_hash(vo->retired_id[k]) % RP_VO_RETIRED_CELLS;
+        while (vo->retired_cell[i] != RP_VO_EMPTY_ID) {
+            i = (i + 1u) % RP_VO_RETIRED_CELLS;
+        }
+        vo->retired_cell[i] = vo->retired_id[k];
+    }
+}
+
+/* Keep the retired tracks that either camera of their pair still tracks in fs (ids are not
+ * reused), and every one of a pair whose camera has no feature in fs (no image, or a blank
+ * one: its tracker lost nothing). */
 static void retired_prune(rp_vo_stereo_t *vo, const rp_frameset_t *fs)
 {
-    uint16_t kept = 0;
+    if (vo->n_retired == 0) {
+        return;
+    }
+    memset(vo->retired_keep, 0, vo->n_retired);
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-        if (fs->cam_flags[vo->pair[k].a] & RP_FS_NO_IMAGE) {
-            /* no image this set: its tracks wait for the next one */
-            for (uint16_t i = 0; i < vo->n_retired; ++i) {
-                if (vo->retired_pair[i] == k) {
-                    vo->retired_id[kept] = vo->retired_id[i];
-                    vo->retired_pair[kept++] = k;
-                }
+        for (uint8_t c = 0; c < 2; ++c) {
+            const uint8_t cam = c == 0 ? vo->pair[k].a : vo->pair[k].b;
+            const int blind = fs->n[cam] == 0;
+            if (!blind) {
+                match_map_build(vo, fs, cam);
             }
-            continue;
-        }
-        match_map_build(vo, fs, vo->pair[k].a);
-        for (uint16_t i = 0; i < vo->n_retired; ++i) {
-            uint16_t idx;
-            if (vo->retired_pair[i] == k && match_map_find(vo, vo->retired_id[i], &idx)) {
-                vo->retired_id[kept] = vo->retired_id[i];
-                vo->retired_pair[kept++] = k;
+            for (uint16_t i = 0; i < vo->n_retired; ++i) {
+                uint16_t idx;
+                if (vo->retired_pair[i] == k &&
+                    (blind || match_map_find(vo, vo->retired_id[i], &idx))) {
+                    vo->retired_keep[i] = 1;
+                }
             }
         }
     }
-    vo->n_retired = kept;
+    uint16_t kept = 0;
+    for (uint16_t i = 0; i < vo->n_retired; ++i) {
+        if (vo->retired_keep[i]) {
+            vo->retired_id[kept] = vo->retired_id[i];
+            vo->retired_pair[kept++] = vo->retired_pair[i];
+        }
+    }
+    if (kept != vo->n_retired) {
+        vo->n_retired = kept;
+        retired_rehash(vo);
+    }
 }
 
+static int pair_rejected(const rp_vo_stereo_t *vo, uint32_t n);
+
 /* Retire the tracks of the n observations' landmarks that the last drop removed, if the update
- * could judge them (rp_vo_stereo.h): its inliers most of the n and from more than one pair when
- * the layout has several. The oldest retired track makes room when the list is full. */
+ * could judge them (rp_vo_stereo.h): its inliers most of the n, from more than one pair when
+ * the layout has several, and no pair mostly left out unless rig RANSAC confirmed it. */
 static void retire_dropped(rp_vo_stereo_t *vo, uint32_t n)
 {
     uint32_t n_used = 0;
@@ -201,8 +235,12 @@ static void retire_dropped(rp_vo_stereo_t *vo, uint32_t n)
             pairs_used |= 1u << pair_of_cam(vo, vo->obs[i].cam);
         }
     }
-    const int several = pairs_used & (pairs_used - 1u);
-    if (!vo->cfg.retire_outliers || 2u * n_used <= n || (vo->cfg.n_pairs > 1 && !several)) {
+    const int several = (pairs_used & (pairs_used - 1u)) != 0u;
+    /* a pair mostly left out judges the prediction, unless rig RANSAC, which has none, found
+     * no larger consensus than the one kept */
+    const int judged = !pair_rejected(vo, n) || (vo->refind_inl > 0 && vo->refind_inl <= n_used);
+    if (!vo->cfg.retire_outliers || 2u * n_used <= n || (vo->cfg.n_pairs > 1 && !several) ||
+        !judged) {
         return;
     }
     for (uint32_t i = 0; i < n; ++i) {
@@ -212,14 +250,20 @@ static void retire_dropped(rp_vo_stereo_t *vo, uint32_t n)
             retired(vo, id)) {
             continue;
         }
-        if (vo->n_retired == RP_VO_RETIRED_MAX) {
+        if (vo->n_retired == RP_VO_RETIRED_MAX) { /* the first listed makes room */
             memmove(vo->retired_id, vo->retired_id + 1,
                     (RP_VO_RETIRED_MAX - 1u) * sizeof(vo->retired_id[0]));
             memmove(vo->retired_pair, vo->retired_pair + 1, RP_VO_RETIRED_MAX - 1u);
             vo->n_retired--;
+            retired_rehash(vo);
         }
         vo->retired_id[vo->n_retired] = id;
         vo->retired_pair[vo->n_retired++] = k;
+        uint32_t c = rp_idmap_hash(id) % RP_VO_RETIRED_CELLS;
+        while (vo->retired_cell[c] != RP_VO_EMPTY_ID) {
+            c = (c + 1u) % RP_VO_RETIRED_CELLS;
+        }
+        vo->retired_cell[c] = id;
     }
 }
 
@@ -556,6 +600,7 @@ static rp_status_t update_towards(rp_vo_stereo_t *vo, const rp_real p[6], uint32
 static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
                                   rp_ekf_info_t *info)
 {
+    vo->refind_inl = 0;
     rp_status_t st = rp_ekf_predict(&vo->ekf, dt);
     if (st != RP_OK) {
         return st;
@@ -594,7 +639,9 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
          * still uses fewer than RANSAC found, the filter restarts at the re-found pose. */
         rp_real p[6], cov[36];
         uint32_t n_inl = 0;
-        if (robust_pose(vo, n, p, cov, &n_inl) == RP_OK && n_inl > first_n) {
+        const rp_status_t sr = robust_pose(vo, n, p, cov, &n_inl);
+        vo->refind_inl = sr == RP_OK ? n_inl : 0u;
+        if (sr == RP_OK && n_inl > first_n) {
             rp_ekf_info_t retry;
             vo->n_retried++;
             vo->n_refound++;
@@ -657,6 +704,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         return first_frame(vo, fs, est);
     }
     vo->skewed = 0;
+    vo->refind_inl = 0;
     uint32_t flags = 0;
     /* The pairs whose first camera delivered an image: a pair without one (a slower camera
      * between its frames: RP_FS_NO_IMAGE) keeps its landmarks for its next image. */
