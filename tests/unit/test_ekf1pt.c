@@ -185,6 +185,9 @@ static void test_bad_input_is_refused(void **state)
     prm = rp_ekf1pt_default_params();
     prm.min_hyp = 300;
     assert_status(rp_ekf1pt_update(&fx->op, &ekf, rig, fx->obs, fx->n, &prm, NULL, NULL), RP_E_ARG);
+    prm = rp_ekf1pt_default_params();
+    prm.regroup = 2;
+    assert_status(rp_ekf1pt_update(&fx->op, &ekf, rig, fx->obs, fx->n, &prm, NULL, NULL), RP_E_ARG);
     assert_memory_equal(ekf.x, before.x, sizeof(ekf.x));
     assert_status(rp_ekf1pt_seed(NULL, 1), RP_E_ARG);
     /* too few observations: rp_ekf_update's answer, the state left as predicted */

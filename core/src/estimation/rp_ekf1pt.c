@@ -24,6 +24,7 @@ rp_ekf1pt_params_t rp_ekf1pt_default_params(void)
     p.min_hyp = 2;
     p.max_hyp = 200;
     p.plain_without_majority = 0;
+    p.regroup = 1;
     return p;
 }
 
@@ -161,9 +162,10 @@ static uint32_t draws_needed(const rp_ekf1pt_params_t *prm, rp_real eps)
     return ni > prm->min_hyp ? ni : prm->min_hyp;
 }
 
-/* The support of a hypothesis that beat the best so far, refined (local optimisation, as
+/* The support of a hypothesis that beat the best so far, from base (the prior, or in the
+ * rescue's consensus the low-innovation posterior), refined (local optimisation, as
  * LO-RANSAC does for minimal solvers: O. Chum, J. Matas, J. Kittler, DAGM 2003): s->post =
- * the prior updated (LO_ITERATIONS linearisations) by at most LO_MAX_OBS of the c
+ * base updated (LO_ITERATIONS linearisations) by at most LO_MAX_OBS of the c
  * observations in s->cand, every ceil(c / LO_MAX_OBS)-th of them (the observations come
  * grouped by camera, so the stride spreads them over the cameras), then that posterior's
  * support at threshold thr2 into s->cand. Returns its size, or 0 (s->cand cleared) if the
@@ -173,8 +175,9 @@ static uint32_t draws_needed(const rp_ekf1pt_params_t *prm, rp_real eps)
  * inlier ratio than the data's. Why a subset: the refined pose only has to score the others
  * within the pixel gate; LO_MAX_OBS inliers of 0.5 px pin it to about a tenth of a pixel, at
  * a fixed cost whatever the number of observations. */
-static uint32_t local_opt(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_obs_t *obs,
-                          uint32_t n, uint32_t c, rp_real thr2, uint32_t n_ok)
+static uint32_t local_opt(rp_ekf1pt_t *s, const rp_ekf_t *base, const rp_rig_t *rig,
+                          const rp_obs_t *obs, uint32_t n, uint32_t c, rp_real thr2,
+                          uint32_t n_ok)
 {
     const uint32_t stride = (c + LO_MAX_OBS - 1) / LO_MAX_OBS;
     uint32_t m = 0, seen = 0;
@@ -183,15 +186,85 @@ static uint32_t local_opt(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_obs_t *o
             s->sel[m++] = obs[k];
         }
     }
-    s->post = s->prior;
+    s->post = *base;
     s->post.prm.iterations = LO_ITERATIONS;
     s->post.prm.min_features = 1;
     if (rp_ekf_update(&s->post, rig, s->sel, m, NULL, NULL) != RP_OK) {
-        s->post = s->prior;
+        s->post = *base;
         memset(s->cand, 0, n);
         return 0;
     }
     return support(s, rig, &s->post, obs, n, s->post.x, thr2, n_ok, 0);
+}
+
+/* Step 1 from base (the prior; in the rescue's consensus, the low-innovation posterior): up to
+ * the adaptive count of hypotheses, each base's pose updated by one usable observation (s->ok,
+ * n_ok of them) drawn uniformly, its support at pixel threshold thr2 and, for each new best,
+ * its local optimisation. On return s->best is the largest support, s->post its refined
+ * posterior (base if none was refined), *n_hyp the hypotheses drawn; returns the support's
+ * size. */
+static uint32_t draw_consensus(rp_ekf1pt_t *s, const rp_ekf_t *base, const rp_rig_t *rig,
+                               const rp_obs_t *obs, uint32_t n, uint32_t n_ok,
+                               const rp_ekf1pt_params_t *prm, rp_real s2, rp_real thr2,
+                               uint32_t *n_hyp)
+{
+    rp_real C[36];
+    const rp_real *p0 = base->x;
+    campose_t cp0 = {0};
+    pose_cov(base, C);
+    s->post = *base;
+    uint32_t best = 0, need = prm->max_hyp, h = 0;
+    memset(s->best, 0, n);
+    for (; h < need && n_ok > 0; ++h) {
+        uint32_t pick = rp_rng_below(&s->rng, n_ok), i = 0;
+        for (uint32_t k = 0; k < n; ++k) { /* the pick-th usable observation */
+            if (s->ok[k] && pick-- == 0) {
+                i = k;
+                break;
+            }
+        }
+        rp_real uv[2], J[12], S[4], Si[4], CJt[12];
+        if (!obs_pose(base, p0, &obs[i], &cp0) ||
+            rp_rig_project(rig, obs[i].cam, &cp0.pl, obs[i].M, uv, J, NULL) != RP_OK) {
+            continue;
+        }
+        innov_cov(J, C, s2 / obs[i].w, S, CJt);
+        if (!inv2(S, Si)) {
+            continue;
+        }
+        const rp_real r[2] = {obs[i].uv[0] - uv[0], obs[i].uv[1] - uv[1]};
+        const rp_real g[2] = {Si[0] * r[0] + Si[1] * r[1], Si[2] * r[0] + Si[3] * r[1]};
+        rp_real p[NP], d[NP]; /* p = p0 [+] d, the chart of rp_rig.h */
+        for (int a = 0; a < NP; ++a) {
+            d[a] = CJt[a * 2] * g[0] + CJt[a * 2 + 1] * g[1];
+        }
+        if (rp_pose_plus(p0, d, p) != RP_OK) {
+            continue;
+        }
+        const uint32_t c = support(s, rig, base, obs, n, p, thr2, n_ok, best);
+        if (c > best) {
+            /* the hypothesis's own support, then its refinement's if that is larger */
+            best = c;
+            memcpy(s->best, s->cand, n);
+            /* refined while its support grows (LO_ROUNDS at most): each round's posterior
+             * sees more of the pose directions, so its support reaches further */
+            for (int lo = 0; lo < LO_ROUNDS; ++lo) {
+                const rp_ekf_t post_before = s->post;
+                const uint32_t c_lo = local_opt(s, base, rig, obs, n, best, thr2, n_ok);
+                if (c_lo <= best) {
+                    if (c_lo == 0) {
+                        s->post = post_before; /* the update failed */
+                    }
+                    break;
+                }
+                best = c_lo;
+                memcpy(s->best, s->cand, n);
+            }
+            need = draws_needed(prm, (rp_real)best / (rp_real)n_ok);
+        }
+    }
+    *n_hyp = h;
+    return best;
 }
 
 /* Observations usable, not in s->best and inside the filter's gate at ekf's state with its
@@ -225,6 +298,83 @@ static uint32_t rescue(rp_ekf1pt_t *s, const rp_ekf_t *ekf, const rp_rig_t *rig,
     return added;
 }
 
+/* Step 3: RESCUE_ROUNDS at most of one update from the prior on s->best (the others weighted
+ * 0; used flags into s->cand), each followed by a rescue against its posterior that, if it
+ * adds any, makes the next round. The last update's status. */
+static rp_status_t update_rounds(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
+                                 const rp_obs_t *obs, uint32_t n, rp_real s2, rp_real gate,
+                                 rp_ekf_info_t *info)
+{
+    rp_status_t st = RP_OK;
+    for (int round = 0; round < RESCUE_ROUNDS; ++round) {
+        for (uint32_t k = 0; k < n; ++k) {
+            s->sel[k] = obs[k];
+            if (!s->best[k]) {
+                s->sel[k].w = RP_C(0.0);
+            }
+        }
+        *ekf = s->prior;
+        st = rp_ekf_update(ekf, rig, s->sel, n, s->cand, info);
+        if (st != RP_OK || round + 1 == RESCUE_ROUNDS) {
+            break;
+        }
+        if (rescue(s, ekf, rig, obs, n, s2, gate) == 0) {
+            break;
+        }
+    }
+    return st;
+}
+
+/* The variance per pixel coordinate that the low-innovation consensus (s->low) shows at its
+ * own posterior (s->post), mean w |z - h|^2 / 2, or s2 if that is larger: the scale of what
+ * the model leaves of its inliers (the pixel noise, and errors of the map that the pose update
+ * does not model, e.g. gc's and mono's depths before they converge). */
+static rp_real spread(const rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_obs_t *obs,
+                      uint32_t n, rp_real s2)
+{
+    campose_t cp = {0};
+    rp_real acc = RP_C(0.0);
+    uint32_t m = 0;
+    for (uint32_t k = 0; k < n; ++k) {
+        rp_real uv[2];
+        if (!s->low[k] || !obs_pose(&s->post, s->post.x, &obs[k], &cp) ||
+            rp_rig_project(rig, obs[k].cam, &cp.pl, obs[k].M, uv, NULL, NULL) != RP_OK) {
+            continue;
+        }
+        const rp_real du = obs[k].uv[0] - uv[0], dv = obs[k].uv[1] - uv[1];
+        acc += obs[k].w * (du * du + dv * dv);
+        m++;
+    }
+    const rp_real v = m > 0 ? acc / (RP_C(2.0) * (rp_real)m) : s2;
+    return v > s2 ? v : s2;
+}
+
+/* 1 if every observation the update used (s->cand) and the low-innovation consensus did not
+ * hold (s->low) is within thr2 of the posterior ekf: w |z - h(x+)|^2 <= thr2, thr2 the gate
+ * on the consensus's own spread. (An observation inside an update has a posterior residual of
+ * variance under that of the data, so only a rescued group that the update could not fit
+ * together with the rest fails it.) */
+static int consistent(const rp_ekf1pt_t *s, const rp_ekf_t *ekf, const rp_rig_t *rig,
+                      const rp_obs_t *obs, uint32_t n, rp_real thr2)
+{
+    campose_t cp = {0};
+    for (uint32_t k = 0; k < n; ++k) {
+        rp_real uv[2];
+        if (!s->cand[k] || s->low[k]) {
+            continue;
+        }
+        if (!obs_pose(ekf, ekf->x, &obs[k], &cp) ||
+            rp_rig_project(rig, obs[k].cam, &cp.pl, obs[k].M, uv, NULL, NULL) != RP_OK) {
+            return 0;
+        }
+        const rp_real du = obs[k].uv[0] - uv[0], dv = obs[k].uv[1] - uv[1];
+        if (obs[k].w * (du * du + dv * dv) > thr2) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
 rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
                              const rp_obs_t *obs, uint32_t n, const rp_ekf1pt_params_t *prm,
                              uint8_t *used, rp_ekf1pt_info_t *info)
@@ -240,7 +390,7 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
     }
     if (!s || !ekf || !rig || (n > 0 && !obs) || n > RP_EKF1PT_MAX_OBS ||
         !(prm->confidence > RP_C(0.0) && prm->confidence < RP_C(1.0)) || prm->max_hyp < 1 ||
-        prm->min_hyp > prm->max_hyp || prm->plain_without_majority > 1) {
+        prm->min_hyp > prm->max_hyp || prm->plain_without_majority > 1 || prm->regroup > 1) {
         return RP_E_ARG;
     }
     if (used) {
@@ -273,57 +423,8 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         return rp_ekf_update(ekf, rig, obs, n, used, &info->ekf);
     }
     s->prior = *ekf;
-    s->post = *ekf;
-    uint32_t best = 0, need = prm->max_hyp, h = 0;
-    memset(s->best, 0, n);
-    for (; h < need; ++h) {
-        uint32_t pick = rp_rng_below(&s->rng, n_ok), i = 0;
-        for (uint32_t k = 0; k < n; ++k) { /* the pick-th usable observation */
-            if (s->ok[k] && pick-- == 0) {
-                i = k;
-                break;
-            }
-        }
-        rp_real uv[2], J[12], S[4], Si[4], CJt[12];
-        if (!obs_pose(ekf, p0, &obs[i], &cp0) ||
-            rp_rig_project(rig, obs[i].cam, &cp0.pl, obs[i].M, uv, J, NULL) != RP_OK) {
-            continue;
-        }
-        innov_cov(J, C, s2 / obs[i].w, S, CJt);
-        if (!inv2(S, Si)) {
-            continue;
-        }
-        const rp_real r[2] = {obs[i].uv[0] - uv[0], obs[i].uv[1] - uv[1]};
-        const rp_real g[2] = {Si[0] * r[0] + Si[1] * r[1], Si[2] * r[0] + Si[3] * r[1]};
-        rp_real p[NP], d[NP]; /* p = p0 [+] d, the chart of rp_rig.h */
-        for (int a = 0; a < NP; ++a) {
-            d[a] = CJt[a * 2] * g[0] + CJt[a * 2 + 1] * g[1];
-        }
-        if (rp_pose_plus(p0, d, p) != RP_OK) {
-            continue;
-        }
-        const uint32_t c = support(s, rig, ekf, obs, n, p, thr2, n_ok, best);
-        if (c > best) {
-            /* the hypothesis's own support, then its refinement's if that is larger */
-            best = c;
-            memcpy(s->best, s->cand, n);
-            /* refined while its support grows (LO_ROUNDS at most): each round's posterior
-             * sees more of the pose directions, so its support reaches further */
-            for (int lo = 0; lo < LO_ROUNDS; ++lo) {
-                const rp_ekf_t post_before = s->post;
-                const uint32_t c_lo = local_opt(s, rig, obs, n, best, thr2, n_ok);
-                if (c_lo <= best) {
-                    if (c_lo == 0) {
-                        s->post = post_before; /* the update failed */
-                    }
-                    break;
-                }
-                best = c_lo;
-                memcpy(s->best, s->cand, n);
-            }
-            need = draws_needed(prm, (rp_real)best / (rp_real)n_ok);
-        }
-    }
+    uint32_t h = 0;
+    const uint32_t best = draw_consensus(s, &s->prior, rig, obs, n, n_ok, prm, s2, thr2, &h);
     info->n_hyp = (uint16_t)h;
     info->n_low = (uint16_t)best;
 
@@ -346,22 +447,25 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         info->n_no_majority = 1;
         return st0;
     }
-    rp_status_t st = RP_OK;
-    for (int round = 0; round < RESCUE_ROUNDS; ++round) {
+    rp_status_t st = update_rounds(s, ekf, rig, obs, n, s2, gate, &info->ekf);
+    if (st == RP_OK && prm->regroup && !consistent(s, ekf, rig, obs, n, gate * spread(s, rig, obs, n, s2))) {
+        /* Step 2b (rp_ekf1pt.h): the rescued ones did not fit together; their own consensus
+         * from the low-innovation posterior (s->post, still the one the rescue used) */
+        uint32_t m = 0, h2 = 0;
         for (uint32_t k = 0; k < n; ++k) {
-            s->sel[k] = obs[k];
-            if (!s->best[k]) {
-                s->sel[k].w = RP_C(0.0);
-            }
+            s->ok_all[k] = s->ok[k];
+            s->ok[k] = (uint8_t)(s->ok[k] && s->best[k] && !s->low[k]);
+            m += s->ok[k];
         }
-        *ekf = s->prior;
-        st = rp_ekf_update(ekf, rig, s->sel, n, s->cand, &info->ekf);
-        if (st != RP_OK || round + 1 == RESCUE_ROUNDS) {
-            break;
+        s->base = s->post;
+        (void)draw_consensus(s, &s->base, rig, obs, n, m, prm, s2, thr2, &h2);
+        for (uint32_t k = 0; k < n; ++k) {
+            s->ok[k] = s->ok_all[k];
+            s->best[k] = (uint8_t)(s->best[k] || s->low[k]);
         }
-        if (rescue(s, ekf, rig, obs, n, s2, gate) == 0) {
-            break;
-        }
+        info->n_hyp = (uint16_t)(info->n_hyp + h2);
+        info->n_reconsensus = 1;
+        st = update_rounds(s, ekf, rig, obs, n, s2, gate, &info->ekf);
     }
     /* A camera whose clock jumped (rp_ekf_clock_jumps on the consensus): its features are all
      * outliers of a prior that puts them at the old offset. Its offset restarts, and the

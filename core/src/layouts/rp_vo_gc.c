@@ -513,7 +513,9 @@ static rp_status_t pose_update(rp_vo_gc_t *vo, uint32_t m, uint32_t n_mature,
     rp_status_t st;
     if (vo->cfg.one_point) {
         rp_ekf1pt_info_t oi;
-        st = rp_ekf1pt_update(&vo->op, &vo->ekf, &vo->rig_m, vo->pobs, m, NULL, vo->pused, &oi);
+        rp_ekf1pt_params_t op = rp_ekf1pt_default_params();
+        op.regroup = 0; /* young landmarks at an assumed depth: rp_ekf1pt.h, step 2b */
+        st = rp_ekf1pt_update(&vo->op, &vo->ekf, &vo->rig_m, vo->pobs, m, &op, vo->pused, &oi);
         *info = oi.ekf;
     } else {
         st = rp_ekf_update(&vo->ekf, &vo->rig_m, vo->pobs, m, vo->pused, info);

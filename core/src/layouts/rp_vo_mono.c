@@ -343,6 +343,7 @@ static rp_status_t pose_update(rp_vo_mono_t *vo, uint32_t n, rp_ekf_info_t *info
         rp_ekf1pt_info_t oi;
         rp_ekf1pt_params_t op = rp_ekf1pt_default_params();
         op.plain_without_majority = 1; /* rp_vo_mono.h, step 3 */
+        op.regroup = 0; /* young landmarks at an assumed depth: rp_ekf1pt.h, step 2b */
         st = rp_ekf1pt_update(&vo->op, &vo->ekf, &vo->own, vo->obs, n, &op, vo->used, &oi);
         *info = oi.ekf;
     } else {

@@ -259,7 +259,8 @@ void usage(FILE *out)
                  "  --json-out FILE  write {\"render_<method>_<col>_m|rad\": ...} to FILE\n"
                  "                   (render_points_... with --points)\n"
                  "  --quiet          no per-run lines\n"
-                 "  --verbose        one line per frame set and method (status, features, errors)\n"
+                 "  --verbose        one line per frame set and method (status, features and those\n"
+                 "                   used per camera, landmarks, gated, errors)\n"
                  "  --track-truth    tracked features against the true projection of the scene\n"
                  "                   point each was born on: mean px, share over 1 and 3 px, by age\n"
                  "  --check-track PX exit 1 if a method's tracks are off by more than PX px mean one\n"
@@ -484,11 +485,15 @@ int main(int argc, char **argv)
                     const rp_pipe_info_t *inf = nullptr;
                     rp_pipe_info(pipes[m], &inf);
                     std::printf("  run %u frame %u %-8s st %-12s flags 0x%02x feats %u %u %u %u %u %u "
+                                "used %u %u %u %u %u %u lm %u gated %u "
                                 "err tx %+.5f ty %+.5f tz %+.5f gamma %+.5f\n",
                                 r, j, methods[m].name.c_str(), rp_status_str(st),
                                 (unsigned)est.flags, fs ? fs->n[0] : 0, fs ? fs->n[1] : 0,
                                 fs ? fs->n[2] : 0, fs ? fs->n[3] : 0, fs ? fs->n[4] : 0,
-                                fs ? fs->n[5] : 0, (double)est.p[0] - seq.truth(j)[0],
+                                fs ? fs->n[5] : 0, est.n_used[0], est.n_used[1], est.n_used[2],
+                                est.n_used[3], est.n_used[4], est.n_used[5],
+                                (unsigned)est.n_landmarks, (unsigned)est.n_gated,
+                                (double)est.p[0] - seq.truth(j)[0],
                                 (double)est.p[1] - seq.truth(j)[1],
                                 (double)est.p[2] - seq.truth(j)[2],
                                 (double)est.p[5] - seq.truth(j)[5]);

@@ -9,6 +9,11 @@
 #      before), stereo4 1 mm (measured 0.092 mm).
 # and the tracks against the scene's truth one frame after birth (--check-track): shell 0.2 px
 # (measured 0.089 / 0.087 px for gc's / stereo4's cameras), points 1.0 px (0.476 / 0.406 px).
+# 3. the moving object (--moving-object: a sphere covering 30 % of cam1's view that moves with
+#    the rig, host_tools/render/README.md), 640x480, 60 frame sets of run 0: stereo4's mean tx
+#    error within 10x the same frames' without the object (measured 4.8x; about 100x when
+#    1-point RANSAC's rescue took the object and the scene together: rp_ekf1pt.h, step 2b).
+#    The issue's target, 1.5x, is not met (docs/results.md).
 # RP_E2E_BIN (exported by e2e.mk) is the program; default build/release/rigpose-e2e.
 set -u
 bin=${RP_E2E_BIN:-build/release/rigpose-e2e}
@@ -29,6 +34,25 @@ run "shell scene: gc and stereo4 within their bounds" --face-px 512 --check gc=0
   --check-track 0.2
 run "points scene: gc and stereo4 within their bounds" --points --check gc=0.003,stereo4=0.001 \
   --check-track 1.0
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+tx_of() { # tx_of FILE: stereo4's mean tx error from a --json-out file
+  grep -o '"render_stereo4_tx_m": [0-9.eE+-]*' "$1" | awk '{print $2}'
+}
+what="moving object: stereo4 within 10x of the static scene"
+if "$bin" --methods stereo4 --runs 1 --frames 60 --ss 1 --no-sim-ref --quiet \
+     --json-out "$tmp/static.json" >/dev/null &&
+   "$bin" --methods stereo4 --runs 1 --frames 60 --ss 1 --no-sim-ref --quiet --moving-object \
+     --json-out "$tmp/object.json" >/dev/null &&
+   awk -v s="$(tx_of "$tmp/static.json")" -v o="$(tx_of "$tmp/object.json")" \
+     'BEGIN { printf "stereo4 tx: static %.3g m, moving object %.3g m (%.1fx)\n", s, o, o / s;
+              exit !(s > 0 && o <= 10 * s) }'; then
+  echo "[       OK ] $what"
+  pass=$((pass + 1))
+else
+  echo "[  FAILED  ] $what"
+  fail=$((fail + 1))
+fi
 if [ "$fail" -eq 0 ]; then
   echo "[  PASSED  ] $pass test(s)."
 else
