@@ -573,6 +573,69 @@ static void test_topup_waits_for_its_turn(void **s)
     assert_true(n2 > info.n_tracked);
 }
 
+/* Given a full tracker on a still scene, when half of its tracks are made dormant
+ * (rp_track_set_dormant), then the next frame tops up although every track survived: the live
+ * ones are under the threshold; the dormant ones are still tracked and reported, and no new
+ * feature lands within min_dist of one; without the marking the same frame only tracks.
+ * Dormancy survives tracking and ends when the track is lost; bad arguments are refused. */
+static void test_dormant_tracks_leave_the_budget(void **s)
+{
+    (void)s;
+    texture_t t;
+    texture_make(&t);
+    render(&t, 0, 0, img0);
+    rp_image_t a = view(img0, W, H);
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    uint16_t n0 = 0, n1 = 0;
+    rp_track_info_t info;
+    for (int mark = 0; mark < 2; ++mark) {
+        assert_ok(rp_track_init(&trk, &cfg));
+        assert_ok(rp_track_process(&trk, &a, 0, f0, RP_MAX_FEATS_PER_CAM, &n0, &info));
+        assert_true(n0 >= cfg.topup_below);
+        uint32_t ids[RP_MAX_FEATS_PER_CAM];
+        uint16_t n_ids = 0, marked = 0;
+        for (uint16_t i = 0; i < n0; i += 2) {
+            ids[n_ids++] = f0[i].id;
+        }
+        if (mark) {
+            assert_ok(rp_track_set_dormant(&trk, ids, n_ids, &marked));
+            assert_int_equal(marked, n_ids);
+            assert_int_equal(trk.n_dormant, n_ids);
+            assert_ok(rp_track_set_dormant(&trk, ids, n_ids, &marked)); /* already dormant */
+            assert_int_equal(marked, 0);
+        }
+        assert_ok(rp_track_process(&trk, &a, 1, f1, RP_MAX_FEATS_PER_CAM, &n1, &info));
+        assert_int_equal(info.n_tracked, n0);
+        print_message("%s: %u tracked, %u new\n", mark ? "half dormant" : "none dormant",
+                      info.n_tracked, info.n_new);
+        if (!mark) {
+            assert_int_equal(info.n_new, 0);
+            continue;
+        }
+        assert_true(info.flags & RP_TRACK_TOPPED_UP);
+        assert_true(info.n_new > 0);
+        assert_int_equal(trk.n_dormant, n_ids);
+        for (uint16_t j = 0; j < n_ids; ++j) {
+            const rp_feat_t *d = find_id(f1, n1, ids[j]);
+            assert_non_null(d);
+            for (int i = info.n_tracked; i < n1; ++i) {
+                const double dx = (double)(f1[i].uv[0] - d->uv[0]);
+                const double dy = (double)(f1[i].uv[1] - d->uv[1]);
+                assert_true(dx * dx + dy * dy >= (double)cfg.min_dist * cfg.min_dist - 1.0);
+            }
+        }
+        /* losing them: dropped tracks take their dormancy with them */
+        uint16_t dropped = 0;
+        assert_ok(rp_track_drop_ids(&trk, ids, n_ids, &dropped));
+        assert_int_equal(dropped, n_ids);
+        assert_int_equal(trk.n_dormant, 0);
+    }
+    assert_status(rp_track_set_dormant(NULL, NULL, 0, NULL), RP_E_ARG);
+    assert_status(rp_track_set_dormant(&trk, NULL, 3, NULL), RP_E_ARG);
+    assert_ok(rp_track_set_dormant(&trk, NULL, 0, NULL));
+}
+
 /* Given a textured scene moving (sub-pixel shifts, up to 9 px a frame, a blank frame, a jump that
  * loses tracks at the border), then the library's tracker (vector kernels where the compiler has
  * them) and the plain-C build give bit-identical pyramids, features, positions and events. */
@@ -791,6 +854,7 @@ int main(void)
         cmocka_unit_test(test_tiny_image),
         cmocka_unit_test(test_topup_refills_emptied_cells),
         cmocka_unit_test(test_topup_waits_for_its_turn),
+        cmocka_unit_test(test_dormant_tracks_leave_the_budget),
         cmocka_unit_test(test_weights_every_subpixel_pair),
         cmocka_unit_test(test_state_size),
         cmocka_unit_test(test_vector_equals_scalar),

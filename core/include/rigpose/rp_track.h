@@ -145,9 +145,11 @@ typedef struct {
     uint32_t next_k;  /* serial of the next new track (id rp_track_id(cfg.cam, next_k)); counts
                        * modulo 2^28 (RP_TRACK_SERIAL_MASK) */
     uint16_t n;       /* current tracks */
+    uint16_t n_dormant; /* of those, dormant (rp_track_set_dormant) */
     uint8_t topup_turn; /* 1: the next rp_track_process may top up (rp_track_set_topup_turn) */
     uint32_t id[RP_MAX_FEATS_PER_CAM];
     int32_t pos_q16[RP_MAX_FEATS_PER_CAM][2]; /* level-0 position, Q16 px */
+    uint8_t dormant[RP_MAX_FEATS_PER_CAM];    /* 1: tracked to hold its place only */
     /* scratch of detection: rows stream through small rings, no full-frame response map */
     int32_t prod[3][3][RP_TRACK_MAX_W]; /* Sobel products gx^2, gx gy, gy^2 of 3 image rows */
     int32_t vsum[3][RP_TRACK_MAX_W];    /* their vertical 3-sums on the response row */
@@ -197,6 +199,17 @@ rp_status_t rp_track_keep_owned(rp_tracker_t *trk, uint8_t owner, uint16_t *n_ke
  * (may be NULL) gets how many went. RP_E_ARG (NULL trk, or NULL ids with n_ids > 0). */
 rp_status_t rp_track_drop_ids(rp_tracker_t *trk, const uint32_t *ids, uint16_t n_ids,
                               uint16_t *n_dropped);
+
+/* Makes the tracks whose id is one of ids[0..n_ids-1] dormant: still tracked, reported and
+ * holding their place (the detector keeps min_dist from them and counts them in the cell caps),
+ * but no longer counted in the target and the top-up threshold, which count the live tracks
+ * only. For tracks that the estimator has judged useless but that would come back if dropped:
+ * a stereo layout's retired tracks (rp_vo_stereo.h) on an object that moves with the rig,
+ * which otherwise fill the budget and keep the detector from the static scene. A track stays
+ * dormant until it is lost. *n_marked (may be NULL) gets how many became dormant.
+ * RP_E_ARG (NULL trk, or NULL ids with n_ids > 0). */
+rp_status_t rp_track_set_dormant(rp_tracker_t *trk, const uint32_t *ids, uint16_t n_ids,
+                                 uint16_t *n_marked);
 
 /* Adopts feature f, found in the tracker's current image by other means (a stereo match), as a
  * track with f's id at f's pixel (rounded to Q16); the next rp_track_process tracks it.

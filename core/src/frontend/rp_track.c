@@ -198,6 +198,7 @@ rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg)
     trk->utime = 0;
     trk->next_k = 0;
     trk->n = 0;
+    trk->n_dormant = 0;
     trk->topup_turn = 1;
     return RP_OK;
 }
@@ -845,6 +846,7 @@ static int detect_pass(rp_tracker_t *trk, const uint8_t *scan, uint16_t *per_cel
         trk->pos_q16[n][0] = kx;
         trk->pos_q16[n][1] = ky;
         trk->id[n] = rp_track_id(cfg->cam, trk->next_k);
+        trk->dormant[n] = 0;
         trk->next_k = (trk->next_k + 1u) & RP_TRACK_SERIAL_MASK;
         trk->n = (uint16_t)(n + 1);
         per_cell[c]++;
@@ -855,8 +857,9 @@ static int detect_pass(rp_tracker_t *trk, const uint8_t *scan, uint16_t *per_cel
 
 /* Tops up to want new features in the current level-0 image, away (min_dist) from the tracked
  * ones, with per-cell caps counting the tracked ones. Only cells under their fair share
- * (ceil(target / cells)) are searched first; the other cells under their cap only if the count
- * is still under cfg.topup_below (or zero) after that. A first frame searches every cell.
+ * (ceil(target / cells)) are searched first; the other cells under their cap only if the live
+ * count (dormant tracks left out) is still under cfg.topup_below (or zero) after that. A first
+ * frame searches every cell.
  * Returns the number added. */
 static int detect(rp_tracker_t *trk, int want)
 {
@@ -881,7 +884,8 @@ static int detect(rp_tracker_t *trk, int want)
     }
     int32_t best = 0;
     int added = detect_pass(trk, scan, per_cell, want, &best);
-    if (added < want && (trk->n < cfg->topup_below || trk->n == 0)) {
+    const int live = (int)trk->n - (int)trk->n_dormant;
+    if (added < want && (live < (int)cfg->topup_below || live == 0)) {
         int any = 0;
         for (int c = 0; c < ncell; ++c) {
             scan[c] = (uint8_t)(!scan[c] && per_cell[c] < cfg->cell_cap);
@@ -1036,6 +1040,7 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
             fs.last[c] = -1;
         }
         uint32_t n_left = 0; /* tracked out of the image: not a failure */
+        uint16_t n_dormant = 0;
         for (uint16_t i = 0; i < trk->n; ++i) {
             const int32_t p[2] = {trk->pos_q16[i][0], trk->pos_q16[i][1]};
             const int cell = cell_of(cfg, img->w, img->h, p[0] >> 16, p[1] >> 16);
@@ -1059,6 +1064,8 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
             trk->id[m] = trk->id[i];
             trk->pos_q16[m][0] = f[0];
             trk->pos_q16[m][1] = f[1];
+            trk->dormant[m] = trk->dormant[i];
+            n_dormant = (uint16_t)(n_dormant + trk->dormant[i]);
             trk->flow_q16[m][0] = f[0] - p[0];
             trk->flow_q16[m][1] = f[1] - p[1];
             fs.last[cell] = (int16_t)m;
@@ -1071,21 +1078,26 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
             inf.n_reset = m;
             inf.flags |= RP_TRACK_RESET;
             m = 0;
+            n_dormant = 0;
         }
         trk->n = m;
+        trk->n_dormant = n_dormant;
         if (m == 0 && inf.n_prev > 0) {
             inf.flags |= RP_TRACK_ALL_LOST;
         }
     } else {
         inf.flags |= RP_TRACK_FIRST;
         trk->n = 0;
+        trk->n_dormant = 0;
     }
     inf.n_tracked = trk->n;
     trk->cur = nxt;
     trk->has_prev = 1;
     trk->utime = utime;
-    if ((trk->n < trk->cfg.topup_below && trk->topup_turn) || trk->n == 0) {
-        inf.n_new = (uint16_t)detect(trk, (int)trk->cfg.target - (int)trk->n);
+    /* the budget counts live tracks only: dormant ones hold their place (rp_track.h) */
+    const int live = (int)trk->n - (int)trk->n_dormant;
+    if ((live < (int)trk->cfg.topup_below && trk->topup_turn) || live == 0) {
+        inf.n_new = (uint16_t)detect(trk, (int)trk->cfg.target - live);
         if (inf.n_new > 0) {
             inf.flags |= RP_TRACK_TOPPED_UP;
         }

@@ -167,6 +167,15 @@ static int retired(const rp_vo_stereo_t *vo, uint32_t id)
     return 0;
 }
 
+rp_status_t rp_vo_stereo_is_retired(const rp_vo_stereo_t *vo, uint32_t id, uint8_t *is_retired)
+{
+    if (vo == NULL || is_retired == NULL) {
+        return RP_E_ARG;
+    }
+    *is_retired = (uint8_t)(id != RP_VO_EMPTY_ID && retired(vo, id));
+    return RP_OK;
+}
+
 /* The hash of the retired ids, from the list (at most half its cells are taken). */
 static void retired_rehash(rp_vo_stereo_t *vo)
 {

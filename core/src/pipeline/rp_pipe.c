@@ -374,6 +374,31 @@ static rp_status_t run_estimator(rp_pipe_t *pipe, rp_estimate_t *est)
     return rc_step(pipe, est);
 }
 
+/* Stereo layouts: the tracks the estimator retired (rp_vo_stereo.h) go dormant in their pair's
+ * first tracker (rp_track_set_dormant): they keep their place, so the detector does not put a
+ * new feature on the same spot of a moving object, but no longer fill the tracker's budget,
+ * so that it tops up from the rest of the view. (An object that moves with the rig keeps its
+ * retired tracks for good; counted, they held the front pair's tracker above its top-up
+ * threshold while the scene's tracks left the view, and the pair re-initialised every frame
+ * from the few left.) The right trackers are fed, not detecting: nothing to do there. */
+static void retired_dormant(rp_pipe_t *pipe)
+{
+    for (uint8_t k = 0; k < pipe->cfg.stereo.n_pairs; ++k) {
+        rp_tracker_t *A = &pipe->trk[pipe->cam_trk[pipe->pair[k].a]];
+        uint16_t m = 0;
+        for (uint16_t i = 0; i < A->n; ++i) {
+            uint8_t r = 0;
+            /* ignored: cannot fail: the pipeline's own estimator */
+            (void)rp_vo_stereo_is_retired(&pipe->est.stereo, A->id[i], &r);
+            if (r && !A->dormant[i]) {
+                pipe->pm[k].drop_ids[m++] = A->id[i];
+            }
+        }
+        /* ignored: cannot fail: the pipeline's own tracker */
+        (void)rp_track_set_dormant(A, pipe->pm[k].drop_ids, m, NULL);
+    }
+}
+
 /* What every step publishes, after the layout's estimator: a LOST estimate says TRACKING and
  * its counts no more (the layout's own rule, kept here for every layout, rc's fusion too); and
  * the covariance of a pose re-found after a blackout keeps the blackout's uncertainty. A held
@@ -559,6 +584,9 @@ rp_status_t rp_pipe_estimate(rp_pipe_t *pipe, rp_estimate_t *est)
      * to utime (the covariance grows, the prediction is bounded: rp_ekf_predict) and reports
      * LOST with nothing used, as for blank images. */
     const rp_status_t st = run_estimator(pipe, est);
+    if (is_stereo(pipe->cfg.layout)) {
+        retired_dormant(pipe);
+    }
     if (lacking > 0) {
         est->flags |= RP_EST_DEGRADED;
     }
