@@ -4,8 +4,9 @@
 #
 #   make $(REL)/rigpose-e2e     the program
 #   make test                   runs host_tools/research/e2e/test_e2e.sh (a short run, loose bounds)
-#   make bench                  $(BUILD)/bench/render.json (render_stereo4_tx_m, render_gc_tx_m)
-#                               and render_points.json (the same on the points scene)
+#   make bench                  $(BUILD)/bench/render.json (render_stereo4_tx_m, render_gc_tx_m),
+#                               render_points.json (the same on the points scene) and
+#                               render_moving.json (the moving object, bench_moving.py)
 
 E2E_BIN := $(REL)/rigpose-e2e
 E2E_RENDER_LIB := $(BUILD)/render/librp_render.a
@@ -36,3 +37,10 @@ $(BUILD)/bench/render_points.json: $(E2E_BIN) FORCE
 	@mkdir -p $(BUILD)/bench
 	$(E2E_BIN) --methods stereo4,gc --runs $(E2E_BENCH_RUNS) --frames 100 --ss 1 --points \
 	    --json-out $@
+
+# The moving object, with and without 1-point RANSAC, against render.json's static runs.
+BENCH_PARTS += $(BUILD)/bench/render_moving.json
+$(BUILD)/bench/render_moving.json: $(E2E_BIN) $(BUILD)/bench/render.json FORCE
+	@mkdir -p $(BUILD)/bench
+	$(PY) host_tools/research/e2e/bench_moving.py $(E2E_BIN) $(BUILD)/bench/render.json $@ \
+	    $(E2E_BENCH_RUNS)

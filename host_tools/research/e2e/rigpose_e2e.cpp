@@ -143,13 +143,19 @@ void add_err(const rp_real p[6], const double *truth, double acc[NCOL])
 }
 
 /* The layout's pipeline configuration on the paper's rig, with rigpose-sim's estimator settings:
- * sigma 0.5 px; single-camera features start at the shell's mid radius 0.8335 m +- 0.15 m.
+ * sigma 0.5 px; single-camera features start at the shell's mid radius 0.8335 m +- 0.15 m;
+ * with `plain`, every update is the plain gated one (1-point RANSAC off).
  * main() prints what this changes from the core's defaults (e2e_why). */
-rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, rp_pipe_cfg_t *cfg)
+rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, bool plain, rp_pipe_cfg_t *cfg)
 {
     const rp_status_t st = rp_pipe_default_cfg(layout, cfg);
     if (st != RP_OK) {
         return st;
+    }
+    if (plain) { /* --no-one-point: the filters' plain gated update */
+        cfg->stereo.one_point = 0;
+        cfg->gc.one_point = 0;
+        cfg->mono.one_point = 0;
     }
     const rp_real sigma = (rp_real)sigma_px;
     cfg->stereo.ekf.sigma_px = sigma;
@@ -167,6 +173,9 @@ const char *const e2e_why[][2] = {
     {"stereo.ekf.sigma_px", "--sigma-px"},
     {"gc.ekf.sigma_px", "--sigma-px"},
     {"mono.ekf.sigma_px", "--sigma-px"},
+    {"stereo.one_point", "--no-one-point"},
+    {"gc.one_point", "--no-one-point"},
+    {"mono.one_point", "--no-one-point"},
     {"gc.init_on_sphere", "the rendered shell surrounds the rig: depth along the ray"},
     {"gc.init_depth", "rigpose-sim's setting: the shell's mid radius 0.8335 m +- 0.15 m"},
     {"mono.init_depth", "rigpose-sim's setting: the shell's mid depth 0.8335 m +- 0.15 m"},
@@ -253,11 +262,14 @@ void usage(FILE *out)
                  "  --runs N         runs (default 5); run r renders rigpose-sim's run r\n"
                  "  --first-run R    first run index (default 0)\n"
                  "  --sigma-px S     the estimators' pixel sigma (default 0.5)\n"
+                 "  --no-one-point   every update the filters' plain gated one (1-point\n"
+                 "                   RANSAC off)\n"
                  "  --no-sim-ref     skip the feature-level reference rows (rp_sim's points and\n"
                  "                   the same model on the rendered surface)\n"
                  "  --check M=TX,..  exit 1 if method M's mean tx error exceeds TX metres\n"
                  "  --json-out FILE  write {\"render_<method>_<col>_m|rad\": ...} to FILE\n"
-                 "                   (render_points_... with --points)\n"
+                 "                   (render_[points_][moving_][plain_]... with --points,\n"
+                 "                   --moving-object, --no-one-point)\n"
                  "  --quiet          no per-run lines\n"
                  "  --verbose        one line per frame set and method (status, features and those\n"
                  "                   used per camera, landmarks, gated, errors)\n"
@@ -337,7 +349,7 @@ int main(int argc, char **argv)
     std::string json_out;
     uint32_t runs = 5, first_run = 0;
     double sigma_px = 0.5;
-    bool sim_ref = true, quiet = false, verbose = false, ttruth = false;
+    bool sim_ref = true, quiet = false, verbose = false, ttruth = false, plain = false;
     double check_track_px = -1.0; /* --check-track bound, px (< 0: none) */
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
@@ -345,6 +357,8 @@ int main(int argc, char **argv)
         if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
             usage(stdout);
             return 0;
+        } else if (!std::strcmp(a, "--no-one-point")) {
+            plain = true;
         } else if (!std::strcmp(a, "--no-sim-ref")) {
             sim_ref = false;
         } else if (!std::strcmp(a, "--verbose")) {
@@ -434,7 +448,7 @@ int main(int argc, char **argv)
         }
         std::vector<rp_pipe_cfg_t> cfgs(methods.size());
         for (size_t m = 0; m < methods.size(); ++m) {
-            rp_status_t st = make_cfg(methods[m].layout, sigma_px, &cfgs[m]);
+            rp_status_t st = make_cfg(methods[m].layout, sigma_px, plain, &cfgs[m]);
             if (st == RP_OK && r == first_run) {
                 (void)rp_cfg_diff_print(stderr, "rigpose-e2e", &cfgs[m], e2e_why);
             }
@@ -563,7 +577,10 @@ int main(int argc, char **argv)
     std::printf("%8s%10s%10s\n", "lost", "feats/fs", "us/fs");
     bool checks_ok = true;
     FILE *js = json_out.empty() ? nullptr : std::fopen(json_out.c_str(), "w");
-    const char *jp = sc.points ? "render_points_" : "render_"; /* JSON key prefix */
+    /* JSON key prefix: render_[points_][moving_][plain_] */
+    const std::string jps = std::string("render_") + (sc.points ? "points_" : "") +
+                            (sc.moving_object ? "moving_" : "") + (plain ? "plain_" : "");
+    const char *jp = jps.c_str();
     if (!json_out.empty() && !js) {
         std::fprintf(stderr, "rigpose-e2e: cannot write %s\n", json_out.c_str());
         return 1;
