@@ -930,6 +930,7 @@ static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
     }
     else if (IS("quarantine") && st) v[0] = p->stereo.quarantine;
     else if (IS("retire_outliers") && st) v[0] = p->stereo.retire_outliers;
+    else if (IS("dormant_retired") && st) v[0] = p->dormant_retired;
     else if (IS("init_depth_m") && !st) {
         v[0] = (double)(gc ? p->gc.init_depth_m : p->mono.init_depth_m);
     } else if (IS("init_depth_sigma_m") && !st) {
@@ -1102,7 +1103,7 @@ static void test_readme_lists_the_core_defaults(void **state)
     printf("config/README.md: %u estimator and %u tracker defaults match the core's\n",
            est_rows, trk_rows);
     /* every setting the parser knows is listed (rp_config.c's keys but method, pairs, cams) */
-    assert_int_equal(est_rows, 27);
+    assert_int_equal(est_rows, 28);
     assert_int_equal(trk_rows, 7);
 }
 

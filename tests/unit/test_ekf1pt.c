@@ -147,6 +147,34 @@ static void test_high_innovation_inliers_are_rescued(void **state)
     free(fx);
 }
 
+/* Clean observations (true structure, 0.5 px noise) and a prior off by 20 mm / 20 mrad: the
+ * rescue fits together, step 2b does not run, and the update is bit for bit the one with it
+ * switched off (regroup 0). */
+static void test_clean_rescue_is_not_redrawn(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0);
+    static const double off[6] = {0.02, -0.02, 0.02, 0.02, -0.02, 0.02};
+    rp_ekf_t a, b;
+    make_ekf(fx, off, RP_C(0.03), &a);
+    make_ekf(fx, off, RP_C(0.03), &b);
+    rp_ekf1pt_params_t prm = rp_ekf1pt_default_params();
+    assert_int_equal(prm.regroup, 1);
+    rp_ekf1pt_info_t ia, ib;
+    assert_ok(rp_ekf1pt_update(&fx->op, &a, &fx->sr.rig, fx->obs, fx->n, &prm, NULL, &ia));
+    prm.regroup = 0;
+    assert_ok(rp_ekf1pt_seed(&fx->op, 1));
+    assert_ok(rp_ekf1pt_update(&fx->op, &b, &fx->sr.rig, fx->obs, fx->n, &prm, NULL, &ib));
+    print_message("clean: low %u, rescued %u, redrawn %u\n", ia.n_low, ia.n_rescued,
+                  ia.n_reconsensus);
+    assert_int_equal(ia.n_reconsensus, 0);
+    assert_int_equal(ia.n_hyp_regroup, 0);
+    assert_memory_equal(a.x, b.x, sizeof(a.x));
+    assert_memory_equal(a.P, b.P, sizeof(a.P));
+    rp_sim_run_free(&fx->sr);
+    free(fx);
+}
+
 static void test_same_seed_same_output(void **state)
 {
     (void)state;
@@ -202,6 +230,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gross_outliers_are_left_out),
         cmocka_unit_test(test_high_innovation_inliers_are_rescued),
+        cmocka_unit_test(test_clean_rescue_is_not_redrawn),
         cmocka_unit_test(test_same_seed_same_output),
         cmocka_unit_test(test_bad_input_is_refused),
     };

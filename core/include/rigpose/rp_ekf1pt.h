@@ -40,8 +40,11 @@
  *     consensus of its own: step 1 among the rescued observations, from the low-innovation
  *     posterior instead of the prior; the largest mutually consistent group joins the
  *     consensus, and step 3 runs again (its rounds rescue the rest against the posterior that
- *     group pins down). Data whose rescue fits together never reach it, and are updated
- *     exactly as without it. (prm.regroup; the test holds where the landmarks are points
+ *     group pins down). A rescue that fits together does not reach it and is updated exactly
+ *     as without it; a clean one can, when one of its rescued observations is past the gate by
+ *     chance (about 1 in 1,000 each), and is then updated on its largest consistent group.
+ *     It runs after the clock-jump test of step 3 (a jumped camera's features are a
+ *     consistent group that the redrawn rescue could take in). (prm.regroup; the test holds where the landmarks are points
  *     known to about the pixel noise, as a stereo pair's triangulations are. gc's and mono's
  *     young landmarks lie along their rays at an assumed depth: sound ones stay off the
  *     posterior by more than the consensus's spread, and redrawing drops them, measured as
@@ -119,6 +122,7 @@ typedef struct {
                             * the plain update was made instead */
     uint8_t n_reconsensus; /* 1: the rescued ones did not fit together, and their own
                             * consensus was drawn (step 2b) */
+    uint16_t n_hyp_regroup; /* hypotheses drawn by step 2b (not in n_hyp) */
 } rp_ekf1pt_info_t;
 
 /* Seed the generator (any seed). RP_E_ARG for NULL. */

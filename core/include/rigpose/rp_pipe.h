@@ -99,6 +99,12 @@ typedef struct {
     uint8_t rc_cams[RP_RC_MAX_CAMS]; /* rc: its cameras, rc_cams[0] the reference (cam1) */
     uint8_t rc_n;             /* rc: how many of rc_cams, 2..RP_RC_MAX_CAMS (default 4) */
     rp_rc_params_t rc;        /* rc: fusion parameters */
+    uint8_t dormant_retired;  /* stereo layouts: 1 (default): after each estimate the tracks the
+                               * estimator retired go dormant in their pair's first tracker
+                               * (rp_track_set_dormant), so that they no longer fill its
+                               * budget; 0: they count as any track. Front ends run as separate
+                               * processes (rigpose-frontend) cannot see the estimator's retired
+                               * tracks: their rig behaves as 0 */
 } rp_pipe_cfg_t;
 
 /* What happened to one camera's image in the last step. */
@@ -130,7 +136,8 @@ typedef struct {
     rp_smatch_t sm;
     rp_feat_t scratch_a[RP_MAX_FEATS_PER_CAM]; /* new left features to match */
     rp_feat_t scratch_b[RP_MAX_FEATS_PER_CAM]; /* their matches */
-    uint32_t drop_ids[RP_MAX_FEATS_PER_CAM];  /* new left features left unmatched */
+    uint32_t drop_ids[RP_MAX_FEATS_PER_CAM];  /* new left features left unmatched; in
+                                               * rp_pipe_estimate, retired ones to make dormant */
     uint8_t done;                             /* matched in this step */
 } rp_pipe_pairmatch_t;
 
@@ -278,8 +285,10 @@ rp_status_t rp_pipe_step_timed(rp_pipe_t *pipe, const rp_image_t *const images[]
  *   with the other trackers' rp_pipe_track and the other pairs' matching (a pair touches only
  *   its two cameras' trackers and entries, and its own matcher). RP_E_ARG: no step begun, not
  *   a stereo layout, k out of range. A pair matched twice in a step is matched once.
- * rp_pipe_estimate: the layout's estimator on the frame set; returns as rp_pipe_step does, or
- *   RP_E_ARG (est NULL, or not matched) with est, if given, zeroed and LOST. */
+ * rp_pipe_estimate: the layout's estimator on the frame set (then, in the stereo layouts with
+ *   cfg.dormant_retired, the retired tracks go dormant in the pairs' first trackers); returns
+ *   as rp_pipe_step does, or RP_E_ARG (est NULL, or not matched) with est, if given, zeroed
+ *   and LOST. */
 rp_status_t rp_pipe_begin(rp_pipe_t *pipe, int64_t utime, rp_estimate_t *est);
 rp_status_t rp_pipe_cam_time(rp_pipe_t *pipe, uint8_t cam, int64_t utime_us);
 rp_status_t rp_pipe_track(rp_pipe_t *pipe, uint8_t t, const rp_image_t *const images[],

@@ -174,7 +174,8 @@ rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg);
  * texture, left the image), tops up to cfg.target when fewer than cfg.topup_below remain and it
  * is the tracker's turn (rp_track_set_topup_turn; always when no track remains), searching
  * first the bucketing cells that hold fewer than ceil(target / cells) features, then, if the
- * count is still under topup_below, the other cells under their cap, and writes at most cap
+ * count is still under topup_below, the other cells under their cap (the target and the counts
+ * are of live tracks: dormant ones, rp_track_set_dormant, are not counted), and writes at most cap
  * features to out (*n_out of them). info (may be NULL) receives the events.
  * Returns:
  *   RP_OK         features in out (on RP_TRACK_ALL_LOST they are all new, re-detected)

@@ -164,11 +164,11 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
  *   RP_E_NO_CONVERGE, RP_E_SINGULAR, RP_E_NAN, ...).
  * RP_E_NAN / RP_E_ARG: the frame set was malformed (non-finite pixel, count over the limit);
  *   the offending features are skipped when possible, otherwise the frame set is ignored. */
+rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est);
+
 /* *is_retired = 1 if track id is one of the retired tracks (above), else 0.
  * RP_E_ARG (NULL vo or is_retired). */
 rp_status_t rp_vo_stereo_is_retired(const rp_vo_stereo_t *vo, uint32_t id, uint8_t *is_retired);
-
-rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est);
 
 #ifdef __cplusplus
 }

@@ -448,25 +448,6 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         return st0;
     }
     rp_status_t st = update_rounds(s, ekf, rig, obs, n, s2, gate, &info->ekf);
-    if (st == RP_OK && prm->regroup && !consistent(s, ekf, rig, obs, n, gate * spread(s, rig, obs, n, s2))) {
-        /* Step 2b (rp_ekf1pt.h): the rescued ones did not fit together; their own consensus
-         * from the low-innovation posterior (s->post, still the one the rescue used) */
-        uint32_t m = 0, h2 = 0;
-        for (uint32_t k = 0; k < n; ++k) {
-            s->ok_all[k] = s->ok[k];
-            s->ok[k] = (uint8_t)(s->ok[k] && s->best[k] && !s->low[k]);
-            m += s->ok[k];
-        }
-        s->base = s->post;
-        (void)draw_consensus(s, &s->base, rig, obs, n, m, prm, s2, thr2, &h2);
-        for (uint32_t k = 0; k < n; ++k) {
-            s->ok[k] = s->ok_all[k];
-            s->best[k] = (uint8_t)(s->best[k] || s->low[k]);
-        }
-        info->n_hyp = (uint16_t)(info->n_hyp + h2);
-        info->n_reconsensus = 1;
-        st = update_rounds(s, ekf, rig, obs, n, s2, gate, &info->ekf);
-    }
     /* A camera whose clock jumped (rp_ekf_clock_jumps on the consensus): its features are all
      * outliers of a prior that puts them at the old offset. Its offset restarts, and the
      * filter's plain gated update runs from the prior on every observation. */
@@ -486,6 +467,28 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
             info->ekf.toff_reset = (uint8_t)(info->ekf.toff_reset | jumped);
             return st1;
         }
+    }
+    /* (after the clock-jump test: a jumped camera's features are a consistent group, which the
+     * redrawn rescue could take in) */
+    if (st == RP_OK && prm->regroup &&
+        !consistent(s, ekf, rig, obs, n, gate * spread(s, rig, obs, n, s2))) {
+        /* Step 2b (rp_ekf1pt.h): the rescued ones did not fit together; their own consensus
+         * from the low-innovation posterior (s->post, still the one the rescue used) */
+        uint32_t m = 0, h2 = 0;
+        for (uint32_t k = 0; k < n; ++k) {
+            s->ok_all[k] = s->ok[k];
+            s->ok[k] = (uint8_t)(s->ok[k] && s->best[k] && !s->low[k]);
+            m += s->ok[k];
+        }
+        s->base = s->post;
+        (void)draw_consensus(s, &s->base, rig, obs, n, m, prm, s2, thr2, &h2);
+        for (uint32_t k = 0; k < n; ++k) {
+            s->ok[k] = s->ok_all[k];
+            s->best[k] = (uint8_t)(s->best[k] || s->low[k]);
+        }
+        info->n_hyp_regroup = (uint16_t)h2;
+        info->n_reconsensus = 1;
+        st = update_rounds(s, ekf, rig, obs, n, s2, gate, &info->ekf);
     }
     if (used) {
         memcpy(used, s->cand, n);

@@ -885,7 +885,7 @@ static int detect(rp_tracker_t *trk, int want)
     int32_t best = 0;
     int added = detect_pass(trk, scan, per_cell, want, &best);
     const int live = (int)trk->n - (int)trk->n_dormant;
-    if (added < want && (live < (int)cfg->topup_below || live == 0)) {
+    if (added < want && (live < (int)cfg->topup_below || trk->n == 0)) {
         int any = 0;
         for (int c = 0; c < ncell; ++c) {
             scan[c] = (uint8_t)(!scan[c] && per_cell[c] < cfg->cell_cap);
@@ -1096,7 +1096,7 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
     trk->utime = utime;
     /* the budget counts live tracks only: dormant ones hold their place (rp_track.h) */
     const int live = (int)trk->n - (int)trk->n_dormant;
-    if ((live < (int)trk->cfg.topup_below && trk->topup_turn) || live == 0) {
+    if ((live < (int)trk->cfg.topup_below && trk->topup_turn) || trk->n == 0) {
         inf.n_new = (uint16_t)detect(trk, (int)trk->cfg.target - live);
         if (inf.n_new > 0) {
             inf.flags |= RP_TRACK_TOPPED_UP;

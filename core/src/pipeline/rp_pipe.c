@@ -75,6 +75,7 @@ rp_status_t rp_pipe_default_cfg(rp_pipe_layout_t layout, rp_pipe_cfg_t *cfg)
     }
     cfg->rc_n = RP_RC_MAX_CAMS;
     cfg->rc = rp_rc_default_params();
+    cfg->dormant_retired = 1;
     return RP_OK;
 }
 
@@ -380,7 +381,8 @@ static rp_status_t run_estimator(rp_pipe_t *pipe, rp_estimate_t *est)
  * so that it tops up from the rest of the view. (An object that moves with the rig keeps its
  * retired tracks for good; counted, they held the front pair's tracker above its top-up
  * threshold while the scene's tracks left the view, and the pair re-initialised every frame
- * from the few left.) The right trackers are fed, not detecting: nothing to do there. */
+ * from the few left.) The right trackers are fed, not detecting: nothing to do there. A track
+ * stays dormant until it is lost, also when the retired list, full, forgets it. */
 static void retired_dormant(rp_pipe_t *pipe)
 {
     for (uint8_t k = 0; k < pipe->cfg.stereo.n_pairs; ++k) {
@@ -584,7 +586,7 @@ rp_status_t rp_pipe_estimate(rp_pipe_t *pipe, rp_estimate_t *est)
      * to utime (the covariance grows, the prediction is bounded: rp_ekf_predict) and reports
      * LOST with nothing used, as for blank images. */
     const rp_status_t st = run_estimator(pipe, est);
-    if (is_stereo(pipe->cfg.layout)) {
+    if (is_stereo(pipe->cfg.layout) && pipe->cfg.dormant_retired) {
         retired_dormant(pipe);
     }
     if (lacking > 0) {

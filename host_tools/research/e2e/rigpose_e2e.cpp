@@ -656,7 +656,7 @@ int main(int argc, char **argv)
                 std::fprintf(js, ", \"%s%s_vs_sim_tx_ratio\": %.4g", jp, m.name.c_str(),
                              m.err[0] / m.err_sim[0]);
                 if (!sc.points) {
-                    std::fprintf(js, ", \"render_%s_vs_surface_tx_ratio\": %.4g",
+                    std::fprintf(js, ", \"%s%s_vs_surface_tx_ratio\": %.4g", jp,
                                  m.name.c_str(), m.err[0] / m.err_surf[0]);
                 }
             }
