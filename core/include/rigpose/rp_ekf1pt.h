@@ -40,7 +40,9 @@
  *     consensus of its own: step 1 among the rescued observations, from the low-innovation
  *     posterior instead of the prior; the largest mutually consistent group joins the
  *     consensus, and step 3 runs again (its rounds rescue the rest against the posterior that
- *     group pins down). A rescue that fits together does not reach it and is updated exactly
+ *     group pins down). If a used observation outside the consensus is still past that gate
+ *     (the largest group among the rescued was the one the consensus left out: a moving object
+ *     while the consensus holds the scene), the consensus alone makes the update. A rescue that fits together does not reach it and is updated exactly
  *     as without it; a clean one can, when one of its rescued observations is past the gate by
  *     chance (about 1 in 1,000 each), and is then updated on its largest consistent group.
  *     It runs after the clock-jump test of step 3 (a jumped camera's features are a
@@ -121,7 +123,8 @@ typedef struct {
     uint8_t n_no_majority; /* 1: consensus + rescued were under half of the usable ones, and
                             * the plain update was made instead */
     uint8_t n_reconsensus; /* 1: the rescued ones did not fit together, and their own
-                            * consensus was drawn (step 2b) */
+                            * consensus was drawn (step 2b); 2: that group did not fit the
+                            * consensus either, and the consensus alone updated */
     uint16_t n_hyp_regroup; /* hypotheses drawn by step 2b (not in n_hyp) */
 } rp_ekf1pt_info_t;
 

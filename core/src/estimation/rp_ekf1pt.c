@@ -298,15 +298,15 @@ static uint32_t rescue(rp_ekf1pt_t *s, const rp_ekf_t *ekf, const rp_rig_t *rig,
     return added;
 }
 
-/* Step 3: RESCUE_ROUNDS at most of one update from the prior on s->best (the others weighted
- * 0; used flags into s->cand), each followed by a rescue against its posterior that, if it
- * adds any, makes the next round. The last update's status. */
+/* Step 3: `rounds` at most of one update from the prior on s->best (the others weighted 0;
+ * used flags into s->cand), each but the last followed by a rescue against its posterior
+ * that, if it adds any, makes the next round. The last update's status. */
 static rp_status_t update_rounds(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
                                  const rp_obs_t *obs, uint32_t n, rp_real s2, rp_real gate,
-                                 rp_ekf_info_t *info)
+                                 int rounds, rp_ekf_info_t *info)
 {
     rp_status_t st = RP_OK;
-    for (int round = 0; round < RESCUE_ROUNDS; ++round) {
+    for (int round = 0; round < rounds; ++round) {
         for (uint32_t k = 0; k < n; ++k) {
             s->sel[k] = obs[k];
             if (!s->best[k]) {
@@ -315,7 +315,7 @@ static rp_status_t update_rounds(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *
         }
         *ekf = s->prior;
         st = rp_ekf_update(ekf, rig, s->sel, n, s->cand, info);
-        if (st != RP_OK || round + 1 == RESCUE_ROUNDS) {
+        if (st != RP_OK || round + 1 == rounds) {
             break;
         }
         if (rescue(s, ekf, rig, obs, n, s2, gate) == 0) {
@@ -447,7 +447,7 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         info->n_no_majority = 1;
         return st0;
     }
-    rp_status_t st = update_rounds(s, ekf, rig, obs, n, s2, gate, &info->ekf);
+    rp_status_t st = update_rounds(s, ekf, rig, obs, n, s2, gate, RESCUE_ROUNDS, &info->ekf);
     /* A camera whose clock jumped (rp_ekf_clock_jumps on the consensus): its features are all
      * outliers of a prior that puts them at the old offset. Its offset restarts, and the
      * filter's plain gated update runs from the prior on every observation. */
@@ -470,8 +470,8 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
     }
     /* (after the clock-jump test: a jumped camera's features are a consistent group, which the
      * redrawn rescue could take in) */
-    if (st == RP_OK && prm->regroup &&
-        !consistent(s, ekf, rig, obs, n, gate * spread(s, rig, obs, n, s2))) {
+    const rp_real thr2c = st == RP_OK && prm->regroup ? gate * spread(s, rig, obs, n, s2) : thr2;
+    if (st == RP_OK && prm->regroup && !consistent(s, ekf, rig, obs, n, thr2c)) {
         /* Step 2b (rp_ekf1pt.h): the rescued ones did not fit together; their own consensus
          * from the low-innovation posterior (s->post, still the one the rescue used) */
         uint32_t m = 0, h2 = 0;
@@ -488,7 +488,15 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         }
         info->n_hyp_regroup = (uint16_t)h2;
         info->n_reconsensus = 1;
-        st = update_rounds(s, ekf, rig, obs, n, s2, gate, &info->ekf);
+        st = update_rounds(s, ekf, rig, obs, n, s2, gate, RESCUE_ROUNDS, &info->ekf);
+        if (st == RP_OK && !consistent(s, ekf, rig, obs, n, thr2c)) {
+            /* the redrawn group does not fit the consensus either (the rescue's largest
+             * group was the one the consensus had left out, a moving object against a
+             * consensus that holds the scene): the consensus alone */
+            memcpy(s->best, s->low, n);
+            info->n_reconsensus = 2;
+            st = update_rounds(s, ekf, rig, obs, n, s2, gate, 1, &info->ekf);
+        }
     }
     if (used) {
         memcpy(used, s->cand, n);
