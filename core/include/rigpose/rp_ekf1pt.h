@@ -42,15 +42,15 @@
  *     consensus, and step 3 runs again (its rounds rescue the rest against the posterior that
  *     group pins down). If a used observation outside the consensus is still past that gate
  *     (the largest group among the rescued was the one the consensus left out: a moving object
- *     while the consensus holds the scene), the consensus alone makes the update. A rescue that fits together does not reach it and is updated exactly
- *     as without it; a clean one can, when one of its rescued observations is past the gate by
- *     chance (about 1 in 1,000 each), and is then updated on its largest consistent group.
- *     It runs after the clock-jump test of step 3 (a jumped camera's features are a
- *     consistent group that the redrawn rescue could take in). (prm.regroup; the test holds where the landmarks are points
- *     known to about the pixel noise, as a stereo pair's triangulations are. gc's and mono's
- *     young landmarks lie along their rays at an assumed depth: sound ones stay off the
- *     posterior by more than the consensus's spread, and redrawing drops them, measured as
- *     gc's noise-free run going from 0.3 mm to 3 cm.)
+ *     while the consensus holds the scene), the consensus alone makes the update. A rescue that
+ *     fits together does not reach 2b and is updated exactly as without it; a clean one can,
+ *     when one of its rescued observations is past the gate by chance (about 1 in 1,000 each).
+ *     2b runs after the clock-jump test of step 3 (a jumped camera's features are a consistent
+ *     group that the redrawn rescue could take in). Switch: prm.regroup. The test holds where
+ *     the landmarks are points known to about the pixel noise, as a stereo pair's
+ *     triangulations are; gc's and mono's young landmarks lie along their rays at an assumed
+ *     depth, sound ones stay off the posterior by more than the consensus's spread, and
+ *     redrawing drops them (gc's noise-free run went from 0.3 mm to 3 cm with it).
  *  3. One update of the filter from its prior (rp_ekf_update: iterated, gated) on the
  *     low-innovation inliers and the rescued ones, the others weighted 0. The paper's two
  *     partial updates in a row are not used: the second would be linearised at, and gated

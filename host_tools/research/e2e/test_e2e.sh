@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # test_e2e.sh - short end-to-end runs from rendered pixels (run by `make test`): 1 and 2 at
-# 320x240, 25 frame sets of the paper's motion through the core's image pipeline, stereo4 and gc with loose
-# bounds on the mean tx error (a broken front end or a jumping estimator is off by centimetres):
+# 320x240, 25 frame sets of the paper's motion through the core's image pipeline, stereo4 and
+# gc with loose bounds on the mean tx error (a broken front end or a jumping estimator is off by
+# centimetres):
 #   1. the shell scene: gc 4 mm (measured 2.3 mm; 3.6 mm before gc's metric scale step, whose
 #      map scale then came from the assumed depth), stereo4 0.5 mm (measured 0.010 mm; before
 #      rp_vo_stereo's widened retry it jumped by ~1 cm here);
@@ -44,7 +45,8 @@ if "$bin" --methods stereo4 --runs 1 --frames 60 --ss 1 --no-sim-ref --quiet \
      --json-out "$tmp/static.json" >/dev/null &&
    "$bin" --methods stereo4 --runs 1 --frames 60 --ss 1 --no-sim-ref --quiet --moving-object \
      --json-out "$tmp/object.json" >/dev/null &&
-   awk -v s="$(tx_of "$tmp/static.json" render_)" -v o="$(tx_of "$tmp/object.json" render_moving_)" \
+   awk -v s="$(tx_of "$tmp/static.json" render_)" \
+       -v o="$(tx_of "$tmp/object.json" render_moving_)" \
      'BEGIN { printf "stereo4 tx: static %.3g m, moving object %.3g m (%.1fx)\n", s, o, o / s;
               exit !(s > 0 && o > 0 && o <= 10 * s) }'; then
   echo "[       OK ] $what"
