@@ -116,6 +116,8 @@ typedef struct {
     size_t state_size;
     rp_status_t (*init)(void *state, const rp_rig_t *rig, const method_opts_t *o);
     rp_status_t (*step)(void *state, const rp_frameset_t *fs, rp_estimate_t *est);
+    /* the method's pose filter (its clock-offset states), or NULL if it has none */
+    const rp_ekf_t *(*filter)(const void *state);
 } method_t;
 
 /* stereo4 / stereo2 as rp_sim_stereo_cfg says (plant noise RP_SIM_STEREO_Q), with the
@@ -158,6 +160,11 @@ static rp_status_t stereo_step(void *state, const rp_frameset_t *fs, rp_estimate
     return rp_vo_stereo_step((rp_vo_stereo_t *)state, fs, est);
 }
 
+static const rp_ekf_t *stereo_filter(const void *state)
+{
+    return &((const rp_vo_stereo_t *)state)->ekf;
+}
+
 /* gc: the generalised camera over the four single cameras (rp_vo_gc.h), configured as
  * rp_sim_gc_cfg says (new features at the shell's mid radius along their rays). */
 static rp_vo_gc_cfg_t gc_cfg(const method_opts_t *o)
@@ -182,6 +189,11 @@ static rp_status_t gc_init(void *state, const rp_rig_t *rig, const method_opts_t
 static rp_status_t gc_step(void *state, const rp_frameset_t *fs, rp_estimate_t *est)
 {
     return rp_vo_gc_step((rp_vo_gc_t *)state, fs, est);
+}
+
+static const rp_ekf_t *gc_filter(const void *state)
+{
+    return &((const rp_vo_gc_t *)state)->ekf;
 }
 
 /* cam1..cam4: one camera alone (rp_vo_mono.h), reporting its pose mapped to the rig frame.
@@ -281,15 +293,17 @@ static rp_status_t rc_step(void *state, const rp_frameset_t *fs, rp_estimate_t *
 }
 
 static const method_t methods[] = {
-    {RP_PIPE_STEREO4, "4 cameras", sizeof(rp_vo_stereo_t), stereo4_init, stereo_step},
-    {RP_PIPE_STEREO2, "2 cameras", sizeof(rp_vo_stereo_t), stereo2_init, stereo_step},
-    {RP_PIPE_CAM1, "cam 1", sizeof(rp_vo_mono_t), cam1_init, mono_step},
-    {RP_PIPE_CAM2, "cam 2", sizeof(rp_vo_mono_t), cam2_init, mono_step},
-    {RP_PIPE_CAM3, "cam 3", sizeof(rp_vo_mono_t), cam3_init, mono_step},
-    {RP_PIPE_CAM4, "cam 4", sizeof(rp_vo_mono_t), cam4_init, mono_step},
-    {RP_PIPE_RC, "RC", sizeof(rc_state_t), rc_init, rc_step},
+    {RP_PIPE_STEREO4, "4 cameras", sizeof(rp_vo_stereo_t), stereo4_init, stereo_step,
+     stereo_filter},
+    {RP_PIPE_STEREO2, "2 cameras", sizeof(rp_vo_stereo_t), stereo2_init, stereo_step,
+     stereo_filter},
+    {RP_PIPE_CAM1, "cam 1", sizeof(rp_vo_mono_t), cam1_init, mono_step, NULL},
+    {RP_PIPE_CAM2, "cam 2", sizeof(rp_vo_mono_t), cam2_init, mono_step, NULL},
+    {RP_PIPE_CAM3, "cam 3", sizeof(rp_vo_mono_t), cam3_init, mono_step, NULL},
+    {RP_PIPE_CAM4, "cam 4", sizeof(rp_vo_mono_t), cam4_init, mono_step, NULL},
+    {RP_PIPE_RC, "RC", sizeof(rc_state_t), rc_init, rc_step, NULL},
     /* cam1..cam4 -> "cam 1".."cam 4", rc -> "RC", gc -> "2 cameras" (no paper row) */
-    {RP_PIPE_GC, "2 cameras", sizeof(rp_vo_gc_t), gc_init, gc_step},
+    {RP_PIPE_GC, "2 cameras", sizeof(rp_vo_gc_t), gc_init, gc_step, gc_filter},
 };
 #define N_KNOWN_METHODS (sizeof methods / sizeof methods[0])
 
@@ -373,7 +387,9 @@ static void usage(FILE *out, const char *argv0)
             "  --no-refine      keep each landmark's first triangulation (the paper's\n"
             "                   structure) instead of refining it, for ablation\n"
             "  --estimate-offsets  the filters estimate each camera's clock offset but cam1's\n"
-            "                   (estimator.estimate_time_offsets; stereo and gc)\n"
+            "                   (estimator.estimate_time_offsets; stereo and gc); prints\n"
+            "                   their mean and largest |error| to cam1 at frame 50 and the\n"
+            "                   last (JSON: offset_err_ms_f50[_max], offset_err_ms_last[_max])\n"
             "  --known-offsets  the filters are given the true --cam-offsets-ms (their start\n"
             "                   value with --estimate-offsets): the ceiling of compensation\n"
             "  --model-jitter   the filters' estimator.time_jitter_s is --jitter-ms\n"
@@ -674,7 +690,33 @@ typedef struct {
      * those within 10 degrees of yaw +-90 (and their count), and the largest */
     double rot_sum, rot90_sum, rot_max;
     uint32_t n90, lost90; /* frames near yaw +-90, and those of them lost */
+    /* --estimate-offsets: |estimated - true| clock offset (ms) of each camera whose offset is
+     * a state of the filter, relative to cam1 (the reference, not estimated), at frame
+     * OFF_CHECK_FRAME ([0]) and at the last frame ([1]): sum, largest, count */
+    double off_sum[2], off_max[2];
+    uint32_t n_off[2];
 } run_result_t;
+
+/* The frame at which the estimated clock offsets are scored (issue 15: within 0.5 ms of the
+ * truth after 50 frames). */
+#define OFF_CHECK_FRAME 50u
+
+/* Score the filter's offset states against the simulated clocks (cam_offset_s, rp_sim.h's
+ * camera order = the rig's): each state camera's offset relative to cam1's, in ms. */
+static void score_offsets(const rp_ekf_t *e, const double *cam_offset_s, run_result_t *res,
+                          int slot)
+{
+    for (int c = 1; c < RP_SIM_NCAMS && c < RP_MAX_CAMS; ++c) {
+        if (!(e->toff_mask & (1u << c))) {
+            continue;
+        }
+        const double est = (double)e->toff[c] - (double)e->toff[0];
+        const double err = fabs(est - (cam_offset_s[c] - cam_offset_s[0])) * 1e3;
+        res->off_sum[slot] += err;
+        res->off_max[slot] = fmax(res->off_max[slot], isnan(err) ? INFINITY : err);
+        res->n_off[slot] += 1;
+    }
+}
 
 typedef struct {
     const opts_t *o;
@@ -795,6 +837,10 @@ static void *worker(void *arg)
                 const uint64_t t0 = now_ns();
                 const rp_status_t st = o->m[m]->step(state[m], fs, &est);
                 res->step_ns += now_ns() - t0;
+                const rp_ekf_t *filt = o->m[m]->filter ? o->m[m]->filter(state[m]) : NULL;
+                if (o->est_offsets && filt != NULL && (j == OFF_CHECK_FRAME || j + 1 == o->frames)) {
+                    score_offsets(filt, o->cam_offset_s, res, j == OFF_CHECK_FRAME ? 0 : 1);
+                }
                 if (j == 0) {
                     continue; /* frame 0 defines the world */
                 }
@@ -863,6 +909,9 @@ typedef struct {
     double rot, rot90, rot_max; /* motion turn: geodesic rotation error, rad (run_result_t) */
     uint32_t lost_runs;      /* runs with at least one lost frame */
     uint64_t lost90, n90;    /* motion turn: frames near yaw +-90 lost, and all of them */
+    double off_mean[2], off_max[2]; /* --estimate-offsets (run_result_t): mean and largest
+                                     * |offset error|, ms, at OFF_CHECK_FRAME and the last */
+    uint64_t n_off[2];
 } summary_t;
 
 static int cmp_double(const void *a, const void *b)
@@ -915,6 +964,15 @@ static void summarise(const opts_t *o, const run_result_t *res, double *scratch,
         s->worst_run[c] = scratch[o->runs - 1];
     }
     s->us_per_frame = (double)ns / 1e3 / ((double)o->runs * o->frames);
+    for (int k = 0; k < 2; ++k) {
+        double sum = 0.0;
+        for (uint32_t r = 0; r < o->runs; ++r) {
+            sum += res[r].off_sum[k];
+            s->off_max[k] = fmax(s->off_max[k], res[r].off_max[k]);
+            s->n_off[k] += res[r].n_off[k];
+        }
+        s->off_mean[k] = s->n_off[k] ? sum / (double)s->n_off[k] : 0.0;
+    }
 }
 
 static void json_num(const char *key, double v, int comma)
@@ -967,6 +1025,14 @@ static void print_json(const opts_t *o, const summary_t *s)
                        s[m].lost_runs, (unsigned long long)s[m].lost90,
                        (unsigned long long)s[m].n90);
             }
+        }
+        if (s[m].n_off[0] > 0) {
+            json_num("offset_err_ms_f50", s[m].off_mean[0], 1);
+            json_num("offset_err_ms_f50_max", s[m].off_max[0], 1);
+        }
+        if (s[m].n_off[1] > 0) {
+            json_num("offset_err_ms_last", s[m].off_mean[1], 1);
+            json_num("offset_err_ms_last_max", s[m].off_max[1], 1);
         }
         json_num("worst_run_tx", s[m].worst_run[0], 1);
         json_num("median_run_tx", s[m].median_run[0], 1);
@@ -1056,6 +1122,13 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
         printf("\n");
         print_cols("per-run mean, worst", s[m].worst_run, "%10.6f");
         printf("  (worst tx: run %u)\n", s[m].worst_run_tx);
+        if (s[m].n_off[0] > 0 || s[m].n_off[1] > 0) {
+            printf("  %-22s%10.3f%10.3f  (ms, |estimated - true| offset to cam1 of the %llu "
+                   "state cameras x runs)\n  %-22s%10.3f%10.3f\n",
+                   "offsets f50: mean, max", s[m].off_mean[0], s[m].off_max[0],
+                   (unsigned long long)s[m].n_off[0], "offsets last: mean, max",
+                   s[m].off_mean[1], s[m].off_max[1]);
+        }
         if (o->motion == RP_SIM_MOTION_SMOOTH) {
             printf("  %-22s%10.6f%10.6f  (rad; %u of %u runs lost frames)\n", "rotation: all, max",
                    s[m].rot, s[m].rot_max, s[m].lost_runs, o->runs);

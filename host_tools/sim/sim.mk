@@ -13,3 +13,7 @@ $(BUILD)/bench/layout.json: $(REL)/rigpose-sim host_tools/sim/layout_bench.py FO
 	$(REL)/rigpose-sim --layout-study --methods gc --runs $(LAYOUT_RUNS) --seed 1 --json \
 	    > $(BUILD)/bench/layout_study.json
 	$(PY) host_tools/sim/layout_bench.py $(BUILD)/bench/layout_study.json $@
+
+# `make test`: rigpose-sim's score of the filters' clock-offset states (test_sim_offsets.sh).
+HOST_EXTRA_TESTS += host_tools/sim/test_sim_offsets.sh
+test: $(REL)/rigpose-sim
