@@ -290,30 +290,55 @@ static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
 }
 
 /* r^T S^-1 r with S = H C H^T + s2 I (+ Rx: [xx xy yy], may be NULL): H 2xD, C DxD, both
- * row-major. */
-static rp_real maha_d(const rp_real *H, const rp_real *C, int D, rp_real s2, const rp_real *Rx,
-                      const rp_real r[2])
+ * row-major. cols (nc ascending indices, or NULL: all D) lists the columns where H may be
+ * non-zero; the others are skipped (the same sums in the same order: the same result). */
+static rp_real maha_d(const rp_real *H, const rp_real *C, int D, const int8_t *cols, int nc,
+                      rp_real s2, const rp_real *Rx, const rp_real r[2])
 {
     rp_real HC[2 * DMAX];
-    for (int a = 0; a < 2; ++a) {
-        for (int j = 0; j < D; ++j) {
-            rp_real acc = RP_C(0.0);
-            for (int k = 0; k < D; ++k) {
-                acc += H[a * D + k] * C[k * D + j];
-            }
-            HC[a * D + j] = acc;
-        }
-    }
     rp_real S[4];
-    for (int a = 0; a < 2; ++a) {
-        for (int b = 0; b < 2; ++b) {
-            rp_real acc = RP_C(0.0);
-            for (int k = 0; k < D; ++k) {
-                acc += HC[a * D + k] * H[b * D + k];
+    if (cols == NULL || nc == D) {
+        for (int a = 0; a < 2; ++a) {
+            for (int j = 0; j < D; ++j) {
+                rp_real acc = RP_C(0.0);
+                for (int k = 0; k < D; ++k) {
+                    acc += H[a * D + k] * C[k * D + j];
+                }
+                HC[a * D + j] = acc;
             }
-            S[a * 2 + b] = acc + (a == b ? s2 : RP_C(0.0));
+        }
+        for (int a = 0; a < 2; ++a) {
+            for (int b = 0; b < 2; ++b) {
+                rp_real acc = RP_C(0.0);
+                for (int k = 0; k < D; ++k) {
+                    acc += HC[a * D + k] * H[b * D + k];
+                }
+                S[a * 2 + b] = acc;
+            }
+        }
+    } else {
+        for (int a = 0; a < 2; ++a) {
+            for (int q = 0; q < nc; ++q) {
+                const int j = cols[q];
+                rp_real acc = RP_C(0.0);
+                for (int t = 0; t < nc; ++t) {
+                    acc += H[a * D + cols[t]] * C[cols[t] * D + j];
+                }
+                HC[a * D + j] = acc;
+            }
+        }
+        for (int a = 0; a < 2; ++a) {
+            for (int b = 0; b < 2; ++b) {
+                rp_real acc = RP_C(0.0);
+                for (int t = 0; t < nc; ++t) {
+                    acc += HC[a * D + cols[t]] * H[b * D + cols[t]];
+                }
+                S[a * 2 + b] = acc;
+            }
         }
     }
+    S[0] += s2;
+    S[3] += s2;
     if (Rx) {
         S[0] += Rx[0];
         S[1] += Rx[1];
@@ -330,7 +355,7 @@ static rp_real maha_d(const rp_real *H, const rp_real *C, int D, rp_real s2, con
 rp_real rp_ekf_mahalanobis2(const rp_real J[12], const rp_real C[36], rp_real s2,
                             const rp_real r[2])
 {
-    return maha_d(J, C, NP, s2, NULL, r);
+    return maha_d(J, C, NP, NULL, NP, s2, NULL, r);
 }
 
 /* Posterior covariance Cpost = L S^-1 L^T with S = I + L^T A L (all DxD). */
@@ -398,6 +423,11 @@ typedef struct {
     uint8_t n_off;
     uint8_t off_cam[NO];
     int8_t off_of[NO];  /* camera k -> its offset's index in y, or -1 (not a state) */
+    /* the columns of y where an observation's H can be non-zero, ascending: the pose and the
+     * offset states (the rate is considered, its columns are zero: obs_predict); the gate and
+     * the normal equations skip the others */
+    int8_t cols[DMAX];
+    int nc;
 } yblock_t;
 
 static void yblock_set(yblock_t *y, const rp_ekf_t *ekf, const rp_obs_t *obs, uint32_t n)
@@ -415,6 +445,12 @@ static void yblock_set(yblock_t *y, const rp_ekf_t *ekf, const rp_obs_t *obs, ui
         }
     }
     y->D = timed ? N + y->n_off : NP;
+    y->nc = 0;
+    for (int k = 0; k < y->D; ++k) {
+        if (k < NP || k >= N) {
+            y->cols[y->nc++] = (int8_t)k;
+        }
+    }
 }
 
 /* Prior covariance of y (DxD). */
@@ -663,7 +699,8 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
                 rp_real r[2] = {o->uv[0] - uv[0], o->uv[1] - uv[1]};
                 if (gate) {
                     /* innovation of this feature against the current estimate */
-                    rp_real d2 = maha_d(H, Cpost, D, s2 / o->w, D == NP ? NULL : Rx, r);
+                    rp_real d2 = maha_d(H, Cpost, D, y.cols, y.nc, s2 / o->w,
+                                        D == NP ? NULL : Rx, r);
                     if (d2 > prm->gate_chi2) {
                         n_gated++;
                         info->n_gated_cam[o->cam]++;
@@ -701,11 +738,13 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
                     const rp_real n0 = s2 / o->w + Rx[0], n1 = Rx[1], n2 = s2 / o->w + Rx[2];
                     const rp_real det = n0 * n2 - n1 * n1;
                     const rp_real W0 = n2 / det, W1 = -n1 / det, W2 = n0 / det;
-                    for (int i = 0; i < D; ++i) {
+                    for (int t = 0; t < y.nc; ++t) { /* H's zero columns add nothing */
+                        const int i = y.cols[t];
                         const rp_real j0 = H[i] * W0 + H[D + i] * W1;
                         const rp_real j1 = H[i] * W1 + H[D + i] * W2;
                         b[i] += j0 * rr[0] + j1 * rr[1];
-                        for (int j = 0; j <= i; ++j) {
+                        for (int u = 0; u <= t; ++u) {
+                            const int j = y.cols[u];
                             A[i * D + j] += j0 * H[j] + j1 * H[D + j];
                         }
                     }
