@@ -91,6 +91,7 @@ typedef struct {
     int est_offsets;         /* 1: the filters estimate the cameras' clock offsets */
     const double *known_off_s; /* --known-offsets: the true offsets configured, else NULL */
     double model_jitter_s;     /* --model-jitter: the clocks' jitter as the filters' (s), or 0 */
+    int time_noise_per_feature; /* --time-noise-per-feature: rp_ekf_params_t.group_time_noise 0 */
 } method_opts_t;
 
 /* --estimate-offsets, --known-offsets on a layout's filter parameters. */
@@ -104,6 +105,9 @@ static void offsets_opt(const method_opts_t *o, rp_ekf_params_t *e)
     }
     if (o->model_jitter_s > 0.0) {
         e->time_jitter_s = (rp_real)o->model_jitter_s;
+    }
+    if (o->time_noise_per_feature) {
+        e->group_time_noise = 0;
     }
 }
 
@@ -322,6 +326,7 @@ typedef struct {
     int est_offsets;
     int known_offsets;
     int model_jitter;
+    int time_noise_per_feature; /* --time-noise-per-feature */
     int layout_study;         /* --layout-study given */
     const char *layout_file;  /* its FILE, or NULL for the built-in grid */
     int methods_given, runs_given, frames_given;
@@ -393,6 +398,9 @@ static void usage(FILE *out, const char *argv0)
             "  --known-offsets  the filters are given the true --cam-offsets-ms (their start\n"
             "                   value with --estimate-offsets): the ceiling of compensation\n"
             "  --model-jitter   the filters' estimator.time_jitter_s is --jitter-ms\n"
+            "  --time-noise-per-feature  the filters take the extrapolated pose's error as\n"
+            "                   independent noise per feature (rp_ekf_params_t\n"
+            "                   group_time_noise 0; default: shared per capture time)\n"
             "  --layout-study [FILE]  rank placements of cam2/cam4 (FILE: one per line,\n"
             "                   'name x2 y2 z2 yaw2_deg x4 y4 z4 yaw4_deg', cam1's frame, m;\n"
             "                   no FILE: the built-in grid of 27 around the paper's) by the\n"
@@ -555,6 +563,10 @@ static int parse_args(int argc, char **argv, opts_t *o)
         }
         if (strcmp(arg, "--model-jitter") == 0) {
             o->model_jitter = 1;
+            continue;
+        }
+        if (strcmp(arg, "--time-noise-per-feature") == 0) {
+            o->time_noise_per_feature = 1;
             continue;
         }
         if (strcmp(arg, "--layout-study") == 0) {
@@ -782,7 +794,8 @@ static void *worker(void *arg)
     const opts_t *o = job->o;
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
                                o->known_offsets ? o->cam_offset_s : NULL,
-                               o->model_jitter ? o->jitter_ms * 1e-3 : 0.0};
+                               o->model_jitter ? o->jitter_ms * 1e-3 : 0.0,
+                               o->time_noise_per_feature};
     void *state[MAX_METHODS] = {NULL};
     rp_frameset_t *fs = malloc(sizeof *fs);
     rp_rig_t rig;
@@ -1355,7 +1368,8 @@ static void print_deviations(const opts_t *o)
 {
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
                                o->known_offsets ? o->cam_offset_s : NULL,
-                               o->model_jitter ? o->jitter_ms * 1e-3 : 0.0};
+                               o->model_jitter ? o->jitter_ms * 1e-3 : 0.0,
+                               o->time_noise_per_feature};
     for (unsigned i = 0; i < o->n_methods; ++i) {
         const rp_pipe_layout_t l = o->m[i]->layout;
         rp_pipe_cfg_t cfg;

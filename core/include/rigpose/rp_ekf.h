@@ -77,6 +77,11 @@ typedef struct {
     rp_real time_jitter_s; /* standard deviation of a capture time about its stamp (plus
                             * offset), s (>= 0): each feature's pixel noise gains
                             * jitter^2 (J xi)(J xi)^T, its image motion over that time */
+    uint8_t group_time_noise; /* 1: in a timed update the features of one capture time share
+                               * the error of the pose extrapolated there (rate, jitter and the
+                               * plant's acceleration over it), marginalised once per group
+                               * (rp_ekf.c, tgroup_t); 0: the rate's and the jitter's parts
+                               * as independent pixel noise per feature */
 } rp_ekf_params_t;
 
 /* Defaults for 0.5 px noise and a hand-held / robot motion at ~30 Hz. */

@@ -46,6 +46,7 @@ rp_ekf_params_t rp_ekf_default_params(void)
     p.toff_sigma_s = RP_C(0.02);
     p.toff_q = RP_C(1e-8);
     p.time_jitter_s = RP_C(0.0);
+    p.group_time_noise = 1;
     return p;
 }
 
@@ -60,7 +61,7 @@ static rp_status_t check_params(const rp_ekf_params_t *prm)
     if (prm->sigma_px <= RP_C(0.0) || prm->q_trans < RP_C(0.0) || prm->q_rot < RP_C(0.0) ||
         prm->iterations == 0 || prm->min_features < 3 || !(prm->max_predict_s > RP_C(0.0)) ||
         !(prm->toff_sigma_s > RP_C(0.0)) || prm->toff_q < RP_C(0.0) ||
-        prm->time_jitter_s < RP_C(0.0)) {
+        prm->time_jitter_s < RP_C(0.0) || prm->group_time_noise > 1) {
         return RP_E_ARG;
     }
     return RP_OK;
@@ -624,6 +625,59 @@ static rp_status_t condition_rate(const rp_ekf_t *e0, const rp_real L[36], const
     return RP_OK;
 }
 
+/* The features of one capture time (delta) in a timed update share one error of the pose
+ * extrapolated there: w ~ N(0, Q), Q = delta^2 Pvv (the considered rate) + jitter^2 xi xi^T +
+ * the plant's white acceleration over |delta| (q |delta|^3 / 3 per axis, as the predict's).
+ * Shared, it is marginalised once per group (Woodbury on the group's stacked noise,
+ * s2 / w I + J Q J^T): the normal equations take each feature with its pixel noise alone and
+ * then lose Ayw (Q^-1 + Lw)^-1 Ayw^T, Ayw = sum H^T W J, Lw = sum J^T W J (J: the feature's
+ * Jacobian on the camera-time pose, H's pose columns). Treating w as independent per feature
+ * (its J Q J^T in each pixel's noise) would count it once per feature: with a stereo pair
+ * 25 ms off, stereo4 then did worse than its front pair alone (rigpose-sim --motion smooth). */
+typedef struct {
+    rp_real delta;
+    rp_real Qinv[36];
+    rp_real Q[36];
+    rp_real Ayw[DMAX * NP];
+    rp_real Lw[36];
+    rp_real bw[NP];
+    int on;
+} tgroup_t;
+
+static int tgroup_find(tgroup_t *g, int *n_g, rp_real delta, const rp_ekf_t *e0, const rp_real xi[NP],
+                       rp_real jitter)
+{
+    for (int k = 0; k < *n_g; ++k) {
+        if (g[k].delta == delta) {
+            return k;
+        }
+    }
+    if (*n_g >= NO) {
+        return -1;
+    }
+    tgroup_t *t = &g[(*n_g)++];
+    memset(t, 0, sizeof(*t));
+    t->delta = delta;
+    const rp_real ad = rp_fabs(delta);
+    const rp_real a3 = ad * ad * ad / RP_C(3.0);
+    for (int i = 0; i < NP; ++i) {
+        for (int j = 0; j < NP; ++j) {
+            t->Q[i * NP + j] = delta * delta * e0->P[(NP + i) * N + NP + j] +
+                               jitter * jitter * xi[i] * xi[j];
+        }
+        t->Q[i * NP + i] += (i < 3 ? e0->prm.q_trans : e0->prm.q_rot) * a3;
+    }
+    rp_real Lq[36], I6[36] = {0};
+    for (int i = 0; i < NP; ++i) {
+        I6[i * NP + i] = RP_C(1.0);
+    }
+    t->on = rp_la_chol(&RP_MAT(6, 6, t->Q), &RP_MAT(6, 6, Lq)) == RP_OK &&
+            rp_la_chol_solve(&RP_MAT(6, 6, Lq), &RP_MAT(6, 6, I6), &RP_MAT(6, 6, t->Qinv)) ==
+                RP_OK &&
+            rp_all_finite(t->Qinv, 36);
+    return (int)(t - g);
+}
+
 static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs,
                                uint32_t n, uint8_t *used, rp_ekf_info_t *info)
 {
@@ -683,9 +737,12 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
             memset(info->n_gated_cam, 0, sizeof(info->n_gated_cam));
             n_used = n_gated = n_bad = 0;
             sq_sum = RP_C(0.0);
+            tgroup_t grp[NO];
+            int n_grp = 0;
             for (uint32_t k = 0; k < n; ++k) {
                 const rp_obs_t *o = &obs[k];
                 rp_real uv[2], H[2 * DMAX], Rx[3];
+                tgroup_t *tg = NULL;
                 if (!rp_finite(o->w) || o->w <= RP_C(0.0) || !rp_all_finite(o->uv, 2) ||
                     !rp_finite(o->dt) || o->cam >= rig->n_cams ||
                     obs_predict(&y, rig, o, &pl, xi, toff, P0, prm->time_jitter_s, &cc, uv, H,
@@ -697,6 +754,29 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
                     continue;
                 }
                 rp_real r[2] = {o->uv[0] - uv[0], o->uv[1] - uv[1]};
+                if (D > NP && prm->group_time_noise) {
+                    const int gi = tgroup_find(grp, &n_grp, o->dt + toff[o->cam], &e0, xi,
+                                               prm->time_jitter_s);
+                    tg = gi >= 0 && grp[gi].on ? &grp[gi] : NULL;
+                }
+                if (tg) { /* the shared error's marginal for the gate: J Q J^T */
+                    rp_real JQ[12];
+                    for (int a = 0; a < 2; ++a) {
+                        for (int j = 0; j < NP; ++j) {
+                            rp_real acc = RP_C(0.0);
+                            for (int q = 0; q < NP; ++q) {
+                                acc += H[a * D + q] * tg->Q[q * NP + j];
+                            }
+                            JQ[a * NP + j] = acc;
+                        }
+                    }
+                    Rx[0] = Rx[1] = Rx[2] = RP_C(0.0);
+                    for (int j = 0; j < NP; ++j) {
+                        Rx[0] += JQ[j] * H[j];
+                        Rx[1] += JQ[j] * H[D + j];
+                        Rx[2] += JQ[NP + j] * H[D + j];
+                    }
+                }
                 if (gate) {
                     /* innovation of this feature against the current estimate */
                     rp_real d2 = maha_d(H, Cpost, D, y.cols, y.nc, s2 / o->w,
@@ -733,6 +813,27 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
                             A[i * D + j] += j0 * H[j] + j1 * H[D + j];
                         }
                     }
+                } else if (tg) {
+                    /* the pixel noise alone; the group's shared error is taken out below */
+                    for (int t = 0; t < y.nc; ++t) {
+                        const int i = y.cols[t];
+                        const rp_real j0 = H[i] * wk, j1 = H[D + i] * wk;
+                        b[i] += j0 * rr[0] + j1 * rr[1];
+                        for (int u = 0; u <= t; ++u) {
+                            const int j = y.cols[u];
+                            A[i * D + j] += j0 * H[j] + j1 * H[D + j];
+                        }
+                        for (int q = 0; q < NP; ++q) {
+                            tg->Ayw[i * NP + q] += j0 * H[q] + j1 * H[D + q];
+                        }
+                    }
+                    for (int q = 0; q < NP; ++q) {
+                        const rp_real j0 = H[q] * wk, j1 = H[D + q] * wk;
+                        tg->bw[q] += j0 * rr[0] + j1 * rr[1];
+                        for (int u = 0; u < NP; ++u) {
+                            tg->Lw[q * NP + u] += j0 * H[u] + j1 * H[D + u];
+                        }
+                    }
                 } else {
                     /* the pixel's noise s2 / w I + Rx, inverted: W (2x2 symmetric) */
                     const rp_real n0 = s2 / o->w + Rx[0], n1 = Rx[1], n2 = s2 / o->w + Rx[2];
@@ -747,6 +848,54 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
                             const int j = y.cols[u];
                             A[i * D + j] += j0 * H[j] + j1 * H[D + j];
                         }
+                    }
+                }
+            }
+            /* marginalise each group's shared error: A -= Ayw M Ayw^T, b -= Ayw M bw with
+             * M = (Q^-1 + Lw)^-1 */
+            for (int g = 0; g < n_grp; ++g) {
+                tgroup_t *tg = &grp[g];
+                if (!tg->on) {
+                    continue;
+                }
+                rp_real Mi[36], Lm[36], M[36], I6[36] = {0};
+                for (int i = 0; i < 36; ++i) {
+                    Mi[i] = tg->Qinv[i] + tg->Lw[i];
+                }
+                for (int i = 0; i < NP; ++i) {
+                    I6[i * NP + i] = RP_C(1.0);
+                }
+                symmetrize(Mi, NP);
+                if (rp_la_chol(&RP_MAT(6, 6, Mi), &RP_MAT(6, 6, Lm)) != RP_OK ||
+                    rp_la_chol_solve(&RP_MAT(6, 6, Lm), &RP_MAT(6, 6, I6), &RP_MAT(6, 6, M)) !=
+                        RP_OK) {
+                    continue; /* not reached: Q^-1 is positive definite, Lw semidefinite */
+                }
+                rp_real T[DMAX * NP];
+                for (int t = 0; t < y.nc; ++t) {
+                    const int i = y.cols[t];
+                    for (int q = 0; q < NP; ++q) {
+                        rp_real acc = RP_C(0.0);
+                        for (int u = 0; u < NP; ++u) {
+                            acc += tg->Ayw[i * NP + u] * M[u * NP + q];
+                        }
+                        T[i * NP + q] = acc;
+                    }
+                }
+                for (int t = 0; t < y.nc; ++t) {
+                    const int i = y.cols[t];
+                    rp_real bb = RP_C(0.0);
+                    for (int q = 0; q < NP; ++q) {
+                        bb += T[i * NP + q] * tg->bw[q];
+                    }
+                    b[i] -= bb;
+                    for (int u = 0; u <= t; ++u) {
+                        const int j = y.cols[u];
+                        rp_real acc = RP_C(0.0);
+                        for (int q = 0; q < NP; ++q) {
+                            acc += T[i * NP + q] * tg->Ayw[j * NP + q];
+                        }
+                        A[i * D + j] -= acc;
                     }
                 }
             }
