@@ -633,7 +633,11 @@ static rp_status_t condition_rate(const rp_ekf_t *e0, const rp_real L[36], const
  * then lose Ayw (Q^-1 + Lw)^-1 Ayw^T, Ayw = sum H^T W J, Lw = sum J^T W J (J: the feature's
  * Jacobian on the camera-time pose, H's pose columns). Treating w as independent per feature
  * (its J Q J^T in each pixel's noise) would count it once per feature: with a stereo pair
- * 25 ms off, stereo4 then did worse than its front pair alone (rigpose-sim --motion smooth). */
+ * 25 ms off, stereo4 then did worse than its front pair alone (rigpose-sim --motion smooth).
+ * A group whose Q is not positive definite (at the state's time: no acceleration or rate
+ * part, at most the jitter's rank one; or no plant noise and a singular rate covariance) or
+ * beyond the NO-th capture time
+ * takes its features' Rx as independent pixel noise, as group_time_noise 0 does. */
 typedef struct {
     rp_real delta;
     rp_real Qinv[36];
