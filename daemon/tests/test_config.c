@@ -913,6 +913,7 @@ static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
     else if (IS("time_offset_sigma_s")) v[0] = (double)e->toff_sigma_s;
     else if (IS("time_offset_q")) v[0] = (double)e->toff_q;
     else if (IS("time_jitter_s")) v[0] = (double)e->time_jitter_s;
+    else if (IS("group_time_noise")) v[0] = e->group_time_noise;
     else if (IS("min_tracked")) {
         v[0] = st ? p->stereo.min_tracked : gc ? p->gc.min_tracked : p->mono.min_tracked;
     } else if (IS("default_dt_s")) {
@@ -1103,7 +1104,7 @@ static void test_readme_lists_the_core_defaults(void **state)
     printf("config/README.md: %u estimator and %u tracker defaults match the core's\n",
            est_rows, trk_rows);
     /* every setting the parser knows is listed (rp_config.c's keys but method, pairs, cams) */
-    assert_int_equal(est_rows, 28);
+    assert_int_equal(est_rows, 29);
     assert_int_equal(trk_rows, 7);
 }
 

@@ -36,7 +36,8 @@
     X(e.sigma_px, use, R) X(e.q_trans, use, R) X(e.q_rot, use, R) X(e.gate_chi2, use, R)         \
     X(e.iterations, use, U) X(e.min_features, use, U) X(e.max_predict_s, use, R)               \
     X(e.toff0_s, use, V) X(e.toff_estimate, use, U) X(e.toff_sigma_s, use, R)                    \
-    X(e.toff_q, use, R) X(e.time_jitter_s, use, R)
+    X(e.toff_q, use, R) X(e.time_jitter_s, use, R)                                            \
+    X(e.group_time_noise, use, U)
 #define RP_PIPE_CFG_FIELDS(X)                                                                     \
     X(layout, RP_CD_ALL, L)                                                                       \
     X(track.cam, RP_CD_ALL, U) X(track.levels, RP_CD_ALL, U) X(track.win, RP_CD_ALL, U)          \

@@ -882,6 +882,7 @@ static const est_key_t est_keys[] = {
     {"time_offset_sigma_s", K_REAL, 0.0, 1.0, 1, ALL3(ekf.toff_sigma_s)},
     {"time_offset_q", K_REAL, 0.0, 1.0, 0, ALL3(ekf.toff_q)},
     {"time_jitter_s", K_REAL, 0.0, 1.0, 0, ALL3(ekf.time_jitter_s)},
+    {"group_time_noise", K_BOOL, 0, 1, 0, ALL3(ekf.group_time_noise)},
 };
 #undef ALL3
 #undef F
@@ -924,7 +925,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         "ransac",      "one_point",    "quarantine",    "retire_outliers", "dormant_retired",
         "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s",
         "metric_scale_sigma", "max_predict_s", "estimate_time_offsets", "time_offset_sigma_s",
-        "time_offset_q", "max_pair_skew_s", "time_jitter_s", NULL};
+        "time_offset_q", "max_pair_skew_s", "time_jitter_s", "group_time_noise", NULL};
     const char *P = "estimator";
     yaml_node_t *m;
     char method[16];
