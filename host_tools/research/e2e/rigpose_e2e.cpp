@@ -144,9 +144,11 @@ void add_err(const rp_real p[6], const double *truth, double acc[NCOL])
 
 /* The layout's pipeline configuration on the paper's rig, with rigpose-sim's estimator settings:
  * sigma 0.5 px; single-camera features start at the shell's mid radius 0.8335 m +- 0.15 m;
- * with `plain`, every update is the plain gated one (1-point RANSAC off).
+ * with `plain`, every update is the plain gated one (1-point RANSAC off); with `est_offsets`
+ * the filters estimate each camera's clock offset but the first (from 0).
  * main() prints what this changes from the core's defaults (e2e_why). */
-rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, bool plain, rp_pipe_cfg_t *cfg)
+rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, bool plain, bool est_offsets,
+                     rp_pipe_cfg_t *cfg)
 {
     const rp_status_t st = rp_pipe_default_cfg(layout, cfg);
     if (st != RP_OK) {
@@ -156,6 +158,11 @@ rp_status_t make_cfg(rp_pipe_layout_t layout, double sigma_px, bool plain, rp_pi
         cfg->stereo.one_point = 0;
         cfg->gc.one_point = 0;
         cfg->mono.one_point = 0;
+    }
+    if (est_offsets) { /* --estimate-offsets */
+        cfg->stereo.ekf.toff_estimate = 1;
+        cfg->gc.ekf.toff_estimate = 1;
+        cfg->mono.ekf.toff_estimate = 1;
     }
     const rp_real sigma = (rp_real)sigma_px;
     cfg->stereo.ekf.sigma_px = sigma;
@@ -176,6 +183,9 @@ const char *const e2e_why[][2] = {
     {"stereo.one_point", "--no-one-point"},
     {"gc.one_point", "--no-one-point"},
     {"mono.one_point", "--no-one-point"},
+    {"stereo.ekf.toff_estimate", "--estimate-offsets"},
+    {"gc.ekf.toff_estimate", "--estimate-offsets"},
+    {"mono.ekf.toff_estimate", "--estimate-offsets"},
     {"gc.init_on_sphere", "the rendered shell surrounds the rig: depth along the ray"},
     {"gc.init_depth", "rigpose-sim's setting: the shell's mid radius 0.8335 m +- 0.15 m"},
     {"mono.init_depth", "rigpose-sim's setting: the shell's mid depth 0.8335 m +- 0.15 m"},
@@ -264,12 +274,16 @@ void usage(FILE *out)
                  "  --sigma-px S     the estimators' pixel sigma (default 0.5)\n"
                  "  --no-one-point   every update the filters' plain gated one (1-point\n"
                  "                   RANSAC off)\n"
+                 "  --estimate-offsets  the filters estimate each camera's clock offset but\n"
+                 "                   the first, from 0 (estimator.estimate_time_offsets; with\n"
+                 "                   --cam-offsets-ms)\n"
                  "  --no-sim-ref     skip the feature-level reference rows (rp_sim's points and\n"
                  "                   the same model on the rendered surface)\n"
                  "  --check M=TX,..  exit 1 if method M's mean tx error exceeds TX metres\n"
                  "  --json-out FILE  write {\"render_<method>_<col>_m|rad\": ...} to FILE\n"
-                 "                   (render_[points_][moving_][plain_]... with --points,\n"
-                 "                   --moving-object, --no-one-point)\n"
+                 "                   (render_[points_][moving_][plain_][estoff_]... with\n"
+                 "                   --points, --moving-object, --no-one-point,\n"
+                 "                   --estimate-offsets)\n"
                  "  --quiet          no per-run lines\n"
                  "  --verbose        one line per frame set and method (status, features and those\n"
                  "                   used per camera, landmarks, gated, errors)\n"
@@ -350,6 +364,7 @@ int main(int argc, char **argv)
     uint32_t runs = 5, first_run = 0;
     double sigma_px = 0.5;
     bool sim_ref = true, quiet = false, verbose = false, ttruth = false, plain = false;
+    bool est_offsets = false;
     double check_track_px = -1.0; /* --check-track bound, px (< 0: none) */
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
@@ -359,6 +374,8 @@ int main(int argc, char **argv)
             return 0;
         } else if (!std::strcmp(a, "--no-one-point")) {
             plain = true;
+        } else if (!std::strcmp(a, "--estimate-offsets")) {
+            est_offsets = true;
         } else if (!std::strcmp(a, "--no-sim-ref")) {
             sim_ref = false;
         } else if (!std::strcmp(a, "--verbose")) {
@@ -448,7 +465,7 @@ int main(int argc, char **argv)
         }
         std::vector<rp_pipe_cfg_t> cfgs(methods.size());
         for (size_t m = 0; m < methods.size(); ++m) {
-            rp_status_t st = make_cfg(methods[m].layout, sigma_px, plain, &cfgs[m]);
+            rp_status_t st = make_cfg(methods[m].layout, sigma_px, plain, est_offsets, &cfgs[m]);
             if (st == RP_OK && r == first_run) {
                 (void)rp_cfg_diff_print(stderr, "rigpose-e2e", &cfgs[m], e2e_why);
             }
@@ -577,9 +594,10 @@ int main(int argc, char **argv)
     std::printf("%8s%10s%10s\n", "lost", "feats/fs", "us/fs");
     bool checks_ok = true;
     FILE *js = json_out.empty() ? nullptr : std::fopen(json_out.c_str(), "w");
-    /* JSON key prefix: render_[points_][moving_][plain_] */
+    /* JSON key prefix: render_[points_][moving_][plain_][estoff_] */
     const std::string jps = std::string("render_") + (sc.points ? "points_" : "") +
-                            (sc.moving_object ? "moving_" : "") + (plain ? "plain_" : "");
+                            (sc.moving_object ? "moving_" : "") + (plain ? "plain_" : "") +
+                            (est_offsets ? "estoff_" : "");
     const char *jp = jps.c_str();
     if (!json_out.empty() && !js) {
         std::fprintf(stderr, "rigpose-e2e: cannot write %s\n", json_out.c_str());
