@@ -27,9 +27,12 @@
  * in information form (the sum of H^T R^-1 H over features is DxD, whatever their number), so
  * the covariance stays symmetric positive definite by construction. D = 6 (the pose; the rate
  * follows by conditioning) when every feature is at the state's time and no offset is a
- * state; else D = 12 + the offset states (pose, rate and offsets updated jointly).
+ * state; else D = 12 + the offset states (pose, rate and offsets updated jointly), each capture
+ * time's shared error of the extrapolated pose marginalised per capture time (rp_ekf.c,
+ * tgroup_t: a positive semidefinite net information per group, formed in double).
  * Gate: every iteration tests each feature's innovation r against the current iterate, with
- * S = J C J^T + sigma^2 / w I (C: the prior pose covariance in the first iteration, the last
+ * S = J C J^T + sigma^2 / w I (+ in a timed update the time error's J Q J^T) (C: the prior pose
+ * covariance in the first iteration, the last
  * iteration's posterior after), and leaves it out when r^T S^-1 r > gate_chi2. An iteration
  * whose gate would reject more features than it keeps uses them all (the iterate is still
  * poor: residuals are linearisation error, not noise), and a later iteration gates. The
@@ -75,8 +78,9 @@ typedef struct {
     rp_real toff_q;        /* random-walk density of an offset state, s^2/s (>= 0): the
                             * clocks' drift */
     rp_real time_jitter_s; /* standard deviation of a capture time about its stamp (plus
-                            * offset), s (>= 0): each feature's pixel noise gains
-                            * jitter^2 (J xi)(J xi)^T, its image motion over that time */
+                            * offset), s (>= 0): its image motion over that time, shared by the
+                            * features of one image (group_time_noise) or, per feature,
+                            * jitter^2 (J xi)(J xi)^T in each pixel's noise */
     uint8_t group_time_noise; /* 1: in a timed update the features of one capture time share
                                * the error of the pose extrapolated there (rate, jitter and the
                                * plant's acceleration over it), marginalised once per group

@@ -628,40 +628,45 @@ static rp_status_t condition_rate(const rp_ekf_t *e0, const rp_real L[36], const
 /* The features of one capture time (delta) in a timed update share one error of the pose
  * extrapolated there: w ~ N(0, Q), Q = delta^2 Pvv (the considered rate) + jitter^2 xi xi^T +
  * the plant's white acceleration over |delta| (q |delta|^3 / 3 per axis, as the predict's).
- * Shared, it is marginalised once per group (Woodbury on the group's stacked noise,
- * s2 / w I + J Q J^T): the normal equations take each feature with its pixel noise alone and
- * then lose Ayw (Q^-1 + Lw)^-1 Ayw^T, Ayw = sum H^T W J, Lw = sum J^T W J (J: the feature's
- * Jacobian on the camera-time pose, H's pose columns). Treating w as independent per feature
- * (its J Q J^T in each pixel's noise) would count it once per feature: with a stereo pair
- * 25 ms off, stereo4 then did worse than its front pair alone (rigpose-sim --motion smooth).
- * A group whose Q is not positive definite (at the state's time: no acceleration or rate
- * part, at most the jitter's rank one; or no plant noise and a singular rate covariance) or
- * beyond the NO-th capture time
- * takes its features' Rx as independent pixel noise, as group_time_noise 0 does. */
+ * Treating w as independent per feature (its J Q J^T in each pixel's noise) counts it once per
+ * feature: with a stereo pair 25 ms off, stereo4 then did worse than its front pair alone
+ * (rigpose-sim --motion smooth). So the features of one capture time and one offset state are a
+ * group whose H is J E (E: 6 x D, the identity on the pose and xi on the offset's column), and
+ * w is marginalised once per group: with Lw = sum J^T W J, bw = sum J^T W rr (W = w / s2, the
+ * pixel noise alone) the group adds E^T (Lw - Lw M Lw) E to the normal equations and
+ * E^T (bw - Lw M bw) to the right-hand side, M = (Q^-1 + Lw)^-1 = G (I + G^T Lw G)^-1 G^T with
+ * Q = G G^T, G = [|delta| chol(Pvv), jitter xi, sqrt(q |delta|^3 / 3) I] (6 x 13). No Q^-1 is
+ * formed (Q may be near singular), I + G^T Lw G >= I always factors, and the group's sums and
+ * the difference are in double on every build (Lw ~ 1e8 px^-2 against a net information
+ * ~ 1/Q: in float the difference loses every digit). Groups are formed per capture time and
+ * offset state, so the rate's share, common to all capture times, is still counted once per
+ * capture time. Features at the state's time without jitter (w = 0) take the per-feature path,
+ * as do those beyond RP_MAX_CAMS groups (with their J Q J^T as pixel noise, as
+ * group_time_noise 0). */
+#define TG_COLS 13
 typedef struct {
     rp_real delta;
-    rp_real Qinv[36];
-    rp_real Q[36];
-    rp_real Ayw[DMAX * NP];
-    rp_real Lw[36];
-    rp_real bw[NP];
-    int on;
+    int8_t oi;           /* the offset state's column in y, or -1 */
+    rp_real Q[36];       /* for the gate: J Q J^T */
+    double Lw[36], bw[NP];
+    int used;
 } tgroup_t;
 
-static int tgroup_find(tgroup_t *g, int *n_g, rp_real delta, const rp_ekf_t *e0, const rp_real xi[NP],
-                       rp_real jitter)
+static tgroup_t *tgroup_find(tgroup_t *g, int *n_g, rp_real delta, int8_t oi, const rp_ekf_t *e0,
+                             const rp_real xi[NP], rp_real jitter)
 {
     for (int k = 0; k < *n_g; ++k) {
-        if (g[k].delta == delta) {
-            return k;
+        if (g[k].delta == delta && g[k].oi == oi) {
+            return &g[k];
         }
     }
     if (*n_g >= NO) {
-        return -1;
+        return NULL;
     }
     tgroup_t *t = &g[(*n_g)++];
     memset(t, 0, sizeof(*t));
     t->delta = delta;
+    t->oi = oi;
     const rp_real ad = rp_fabs(delta);
     const rp_real a3 = ad * ad * ad / RP_C(3.0);
     for (int i = 0; i < NP; ++i) {
@@ -671,15 +676,123 @@ static int tgroup_find(tgroup_t *g, int *n_g, rp_real delta, const rp_ekf_t *e0,
         }
         t->Q[i * NP + i] += (i < 3 ? e0->prm.q_trans : e0->prm.q_rot) * a3;
     }
-    rp_real Lq[36], I6[36] = {0};
+    return t;
+}
+
+/* The group's net contribution (see tgroup_t), added to A (lower triangle over y's cols) and b.
+ * Lv: chol(Pvv) in double. RP_E_SINGULAR if I + G^T Lw G does not factor (not for finite
+ * input: it is >= I). */
+static rp_status_t tgroup_apply(const tgroup_t *t, const double Lv[36], const rp_real xi[NP],
+                                rp_real jitter, const rp_ekf_params_t *prm, int D,
+                                const int8_t *cols, int nc, rp_real *A, rp_real *b)
+{
+    double G[NP * TG_COLS] = {0};
+    const double ad = fabs((double)t->delta), a3 = ad * ad * ad / 3.0;
     for (int i = 0; i < NP; ++i) {
-        I6[i * NP + i] = RP_C(1.0);
+        for (int j = 0; j <= i; ++j) {
+            G[i * TG_COLS + j] = ad * Lv[i * NP + j];
+        }
+        G[i * TG_COLS + NP] = (double)jitter * (double)xi[i];
+        G[i * TG_COLS + NP + 1 + i] = sqrt(a3 * (double)(i < 3 ? prm->q_trans : prm->q_rot));
     }
-    t->on = rp_la_chol(&RP_MAT(6, 6, t->Q), &RP_MAT(6, 6, Lq)) == RP_OK &&
-            rp_la_chol_solve(&RP_MAT(6, 6, Lq), &RP_MAT(6, 6, I6), &RP_MAT(6, 6, t->Qinv)) ==
-                RP_OK &&
-            rp_all_finite(t->Qinv, 36);
-    return (int)(t - g);
+    double LG[NP * TG_COLS], S[TG_COLS * TG_COLS];
+    for (int i = 0; i < NP; ++i) {
+        for (int c = 0; c < TG_COLS; ++c) {
+            double acc = 0.0;
+            for (int k = 0; k < NP; ++k) {
+                acc += t->Lw[i * NP + k] * G[k * TG_COLS + c];
+            }
+            LG[i * TG_COLS + c] = acc;
+        }
+    }
+    for (int r = 0; r < TG_COLS; ++r) {
+        for (int c = 0; c < TG_COLS; ++c) {
+            double acc = r == c ? 1.0 : 0.0;
+            for (int k = 0; k < NP; ++k) {
+                acc += G[k * TG_COLS + r] * LG[k * TG_COLS + c];
+            }
+            S[r * TG_COLS + c] = acc;
+        }
+    }
+    if (rp_la_chol_d(S, TG_COLS) != RP_OK) {
+        return RP_E_SINGULAR;
+    }
+    /* LM = Lw M = LG S^-1 LG^T (6x6), then net = Lw - LM Lw... = Lw - LG S^-1 LG^T */
+    double X[TG_COLS * NP]; /* S^-1 LG^T, column by column */
+    for (int i = 0; i < NP; ++i) {
+        double rhs[TG_COLS], x[TG_COLS];
+        for (int c = 0; c < TG_COLS; ++c) {
+            rhs[c] = LG[i * TG_COLS + c];
+        }
+        if (rp_la_chol_solve_d(S, TG_COLS, rhs, x) != RP_OK) {
+            return RP_E_SINGULAR;
+        }
+        for (int c = 0; c < TG_COLS; ++c) {
+            X[c * NP + i] = x[c];
+        }
+    }
+    double Ln[36], bn[NP];
+    for (int i = 0; i < NP; ++i) {
+        for (int j = 0; j < NP; ++j) {
+            double acc = 0.0;
+            for (int c = 0; c < TG_COLS; ++c) {
+                acc += LG[i * TG_COLS + c] * X[c * NP + j];
+            }
+            Ln[i * NP + j] = t->Lw[i * NP + j] - acc;
+        }
+    }
+    /* bn = bw - Lw M bw = bw - LG S^-1 G^T bw */
+    double gb[TG_COLS], y[TG_COLS];
+    for (int c = 0; c < TG_COLS; ++c) {
+        double acc = 0.0;
+        for (int k = 0; k < NP; ++k) {
+            acc += G[k * TG_COLS + c] * t->bw[k];
+        }
+        gb[c] = acc;
+    }
+    if (rp_la_chol_solve_d(S, TG_COLS, gb, y) != RP_OK) {
+        return RP_E_SINGULAR;
+    }
+    for (int i = 0; i < NP; ++i) {
+        double acc = 0.0;
+        for (int c = 0; c < TG_COLS; ++c) {
+            acc += LG[i * TG_COLS + c] * y[c];
+        }
+        bn[i] = t->bw[i] - acc;
+    }
+    /* E^T Ln E and E^T bn: the pose block, and with an offset state its column (Ln xi) and
+     * corner (xi^T Ln xi) */
+    double Lx[NP], xLx = 0.0, bx = 0.0;
+    for (int i = 0; i < NP; ++i) {
+        double acc = 0.0;
+        for (int k = 0; k < NP; ++k) {
+            acc += Ln[i * NP + k] * (double)xi[k];
+        }
+        Lx[i] = acc;
+        xLx += (double)xi[i] * acc;
+        bx += (double)xi[i] * bn[i];
+    }
+    for (int q = 0; q < nc; ++q) {
+        const int i = cols[q];
+        const int ip = i < NP ? i : (i == t->oi ? -1 : -2); /* pose row, offset row, other */
+        if (ip == -2) {
+            continue;
+        }
+        b[i] += (rp_real)(ip >= 0 ? bn[ip] : bx);
+        for (int u = 0; u <= q; ++u) {
+            const int j = cols[u];
+            const int jp = j < NP ? j : (j == t->oi ? -1 : -2);
+            if (jp == -2) {
+                continue;
+            }
+            const double v = ip >= 0 && jp >= 0 ? Ln[ip * NP + jp]
+                             : ip >= 0         ? Lx[ip]
+                             : jp >= 0         ? Lx[jp]
+                                               : xLx;
+            A[i * D + j] += (rp_real)v;
+        }
+    }
+    return RP_OK;
 }
 
 static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs,
@@ -720,6 +833,16 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
     uint16_t n_used = 0, n_gated = 0, n_bad = 0, n_outside = 0;
     rp_real sq_sum = RP_C(0.0);
 
+    /* chol(Pvv) in double for the groups' factor of Q (tgroup_t); Pvv is a block of the prior,
+     * positive definite (checked above); if not, the per-feature path */
+    double Lv[36];
+    int lv_ok = 0;
+    if (D > NP && prm->group_time_noise) {
+        for (int i = 0; i < 36; ++i) {
+            Lv[i] = (double)P0[(NP + i / NP) * N + NP + i % NP];
+        }
+        lv_ok = rp_la_chol_d(Lv, NP) == RP_OK;
+    }
     for (uint8_t it = 0; it < prm->iterations; ++it) {
         rp_pose_lin_t pl;
         if (rp_pose_lin_set(&pl, p) != RP_OK) {
@@ -742,7 +865,7 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
             n_used = n_gated = n_bad = 0;
             sq_sum = RP_C(0.0);
             tgroup_t grp[NO];
-            int n_grp = 0;
+            int n_grp = 0, grp_ok = 1;
             for (uint32_t k = 0; k < n; ++k) {
                 const rp_obs_t *o = &obs[k];
                 rp_real uv[2], H[2 * DMAX], Rx[3];
@@ -758,10 +881,12 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
                     continue;
                 }
                 rp_real r[2] = {o->uv[0] - uv[0], o->uv[1] - uv[1]};
-                if (D > NP && prm->group_time_noise) {
-                    const int gi = tgroup_find(grp, &n_grp, o->dt + toff[o->cam], &e0, xi,
-                                               prm->time_jitter_s);
-                    tg = gi >= 0 && grp[gi].on ? &grp[gi] : NULL;
+                if (D > NP && lv_ok) {
+                    const rp_real dl = o->dt + toff[o->cam];
+                    if (dl != RP_C(0.0) || prm->time_jitter_s > RP_C(0.0)) {
+                        tg = tgroup_find(grp, &n_grp, dl, y.off_of[o->cam], &e0, xi,
+                                         prm->time_jitter_s);
+                    }
                 }
                 if (tg) { /* the shared error's marginal for the gate: J Q J^T */
                     rp_real JQ[12];
@@ -818,24 +943,14 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
                         }
                     }
                 } else if (tg) {
-                    /* the pixel noise alone; the group's shared error is taken out below */
-                    for (int t = 0; t < y.nc; ++t) {
-                        const int i = y.cols[t];
-                        const rp_real j0 = H[i] * wk, j1 = H[D + i] * wk;
-                        b[i] += j0 * rr[0] + j1 * rr[1];
-                        for (int u = 0; u <= t; ++u) {
-                            const int j = y.cols[u];
-                            A[i * D + j] += j0 * H[j] + j1 * H[D + j];
-                        }
-                        for (int q = 0; q < NP; ++q) {
-                            tg->Ayw[i * NP + q] += j0 * H[q] + j1 * H[D + q];
-                        }
-                    }
+                    /* the pixel noise alone, summed per group in double (tgroup_t) */
+                    tg->used = 1;
                     for (int q = 0; q < NP; ++q) {
-                        const rp_real j0 = H[q] * wk, j1 = H[D + q] * wk;
-                        tg->bw[q] += j0 * rr[0] + j1 * rr[1];
-                        for (int u = 0; u < NP; ++u) {
-                            tg->Lw[q * NP + u] += j0 * H[u] + j1 * H[D + u];
+                        const double j0 = (double)H[q] * (double)wk;
+                        const double j1 = (double)H[D + q] * (double)wk;
+                        tg->bw[q] += j0 * (double)rr[0] + j1 * (double)rr[1];
+                        for (int u = 0; u <= q; ++u) {
+                            tg->Lw[q * NP + u] += j0 * (double)H[u] + j1 * (double)H[D + u];
                         }
                     }
                 } else {
@@ -855,53 +970,24 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
                     }
                 }
             }
-            /* marginalise each group's shared error: A -= Ayw M Ayw^T, b -= Ayw M bw with
-             * M = (Q^-1 + Lw)^-1 */
-            for (int g = 0; g < n_grp; ++g) {
+            /* each group's net information, its shared error marginalised (tgroup_t) */
+            for (int g = 0; g < n_grp && grp_ok; ++g) {
                 tgroup_t *tg = &grp[g];
-                if (!tg->on) {
+                if (!tg->used) {
                     continue;
                 }
-                rp_real Mi[36], Lm[36], M[36], I6[36] = {0};
-                for (int i = 0; i < 36; ++i) {
-                    Mi[i] = tg->Qinv[i] + tg->Lw[i];
-                }
-                for (int i = 0; i < NP; ++i) {
-                    I6[i * NP + i] = RP_C(1.0);
-                }
-                symmetrize(Mi, NP);
-                if (rp_la_chol(&RP_MAT(6, 6, Mi), &RP_MAT(6, 6, Lm)) != RP_OK ||
-                    rp_la_chol_solve(&RP_MAT(6, 6, Lm), &RP_MAT(6, 6, I6), &RP_MAT(6, 6, M)) !=
-                        RP_OK) {
-                    continue; /* not reached: Q^-1 is positive definite, Lw semidefinite */
-                }
-                rp_real T[DMAX * NP];
-                for (int t = 0; t < y.nc; ++t) {
-                    const int i = y.cols[t];
-                    for (int q = 0; q < NP; ++q) {
-                        rp_real acc = RP_C(0.0);
-                        for (int u = 0; u < NP; ++u) {
-                            acc += tg->Ayw[i * NP + u] * M[u * NP + q];
-                        }
-                        T[i * NP + q] = acc;
+                for (int q = 0; q < NP; ++q) { /* the upper triangle from the lower */
+                    for (int u = q + 1; u < NP; ++u) {
+                        tg->Lw[q * NP + u] = tg->Lw[u * NP + q];
                     }
                 }
-                for (int t = 0; t < y.nc; ++t) {
-                    const int i = y.cols[t];
-                    rp_real bb = RP_C(0.0);
-                    for (int q = 0; q < NP; ++q) {
-                        bb += T[i * NP + q] * tg->bw[q];
-                    }
-                    b[i] -= bb;
-                    for (int u = 0; u <= t; ++u) {
-                        const int j = y.cols[u];
-                        rp_real acc = RP_C(0.0);
-                        for (int q = 0; q < NP; ++q) {
-                            acc += T[i * NP + q] * tg->Ayw[j * NP + q];
-                        }
-                        A[i * D + j] -= acc;
-                    }
-                }
+                grp_ok = tgroup_apply(tg, Lv, xi, prm->time_jitter_s, prm, D, y.cols, y.nc, A,
+                                      b) == RP_OK;
+            }
+            if (!grp_ok) { /* not for finite input: I + G^T Lw G >= I */
+                reset_covariance(ekf, &e0);
+                info->cov_reset = 1;
+                return RP_E_DIVERGED;
             }
             if (pass == 0) {
                 n_outside = n_gated;
