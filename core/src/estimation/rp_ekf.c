@@ -641,8 +641,9 @@ static rp_status_t condition_rate(const rp_ekf_t *e0, const rp_real L[36], const
  * ~ 1/Q: in float the difference loses every digit). Groups are formed per capture time and
  * offset state, so the rate's share, common to all capture times, is still counted once per
  * capture time. Features at the state's time without jitter (w = 0) take the per-feature path,
- * as do those beyond RP_MAX_CAMS groups (with their J Q J^T as pixel noise, as
- * group_time_noise 0). */
+ * as do those beyond RP_MAX_CAMS groups and every feature when Pvv does not factor: their
+ * pixel noise gains the rate's and the jitter's part (obs_predict's Rx), without the plant's
+ * acceleration term, as with group_time_noise 0. */
 #define TG_COLS 13
 typedef struct {
     rp_real delta;
@@ -833,8 +834,8 @@ static rp_status_t update_once(rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_
     uint16_t n_used = 0, n_gated = 0, n_bad = 0, n_outside = 0;
     rp_real sq_sum = RP_C(0.0);
 
-    /* chol(Pvv) in double for the groups' factor of Q (tgroup_t); Pvv is a block of the prior,
-     * positive definite (checked above); if not, the per-feature path */
+    /* chol(Pvv) in double for the groups' factor of Q (tgroup_t); if the rate's prior block
+     * is not positive definite (no plant noise), the per-feature path */
     double Lv[36];
     int lv_ok = 0;
     if (D > NP && prm->group_time_noise) {
