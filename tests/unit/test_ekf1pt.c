@@ -79,6 +79,17 @@ static void make_ekf(const fixture_t *fx, const double off[6], rp_real ps, rp_ek
     assert_ok(rp_ekf_init(ekf, &prm, x0, P0));
 }
 
+/* Two copies of that filter, for updates compared side by side. */
+static void make_ekf_pair(const fixture_t *fx, const double off[6], rp_real ps, rp_ekf_t *a,
+                          rp_ekf_t *b)
+{
+    make_ekf(fx, off, ps, a);
+    *b = *a;
+}
+
+/* A prior off by 20 mm / 20 mrad in every component. */
+static const double off20[6] = {0.02, -0.02, 0.02, 0.02, -0.02, 0.02};
+
 static double pose_err(const fixture_t *fx, const rp_ekf_t *ekf)
 {
     double e = 0.0;
@@ -93,10 +104,8 @@ static void test_gross_outliers_are_left_out(void **state)
 {
     (void)state;
     fixture_t *fx = fixture(0.4);
-    static const double off[6] = {0.02, -0.02, 0.02, 0.02, -0.02, 0.02};
     rp_ekf_t plain, ekf;
-    make_ekf(fx, off, RP_C(0.03), &plain);
-    make_ekf(fx, off, RP_C(0.03), &ekf);
+    make_ekf_pair(fx, off20, RP_C(0.03), &plain, &ekf);
     rp_ekf_info_t pi;
     (void)rp_ekf_update(&plain, &fx->sr.rig, fx->obs, fx->n, NULL, &pi);
     rp_ekf1pt_info_t info;
@@ -154,10 +163,8 @@ static void test_clean_rescue_is_not_redrawn(void **state)
 {
     (void)state;
     fixture_t *fx = fixture(0.0);
-    static const double off[6] = {0.02, -0.02, 0.02, 0.02, -0.02, 0.02};
     rp_ekf_t a, b;
-    make_ekf(fx, off, RP_C(0.03), &a);
-    make_ekf(fx, off, RP_C(0.03), &b);
+    make_ekf_pair(fx, off20, RP_C(0.03), &a, &b);
     rp_ekf1pt_params_t prm = rp_ekf1pt_default_params();
     assert_int_equal(prm.regroup, 1);
     rp_ekf1pt_info_t ia, ib;
@@ -181,8 +188,7 @@ static void test_same_seed_same_output(void **state)
     fixture_t *fx = fixture(0.3);
     static const double off[6] = {0.005, 0.0, 0.0, 0.0, 0.005, 0.0};
     rp_ekf_t a, b;
-    make_ekf(fx, off, RP_C(0.01), &a);
-    make_ekf(fx, off, RP_C(0.01), &b);
+    make_ekf_pair(fx, off, RP_C(0.01), &a, &b);
     assert_ok(rp_ekf1pt_update(&fx->op, &a, &fx->sr.rig, fx->obs, fx->n, NULL, NULL, NULL));
     assert_ok(rp_ekf1pt_seed(&fx->op, 1));
     assert_ok(rp_ekf1pt_update(&fx->op, &b, &fx->sr.rig, fx->obs, fx->n, NULL, NULL, NULL));

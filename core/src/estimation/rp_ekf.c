@@ -292,7 +292,9 @@ static rp_status_t predict_cv(rp_ekf_t *ekf, rp_real dt)
 
 /* r^T S^-1 r with S = H C H^T + s2 I (+ Rx: [xx xy yy], may be NULL): H 2xD, C DxD, both
  * row-major. cols (nc ascending indices, or NULL: all D) lists the columns where H may be
- * non-zero; the others are skipped (the same sums in the same order: the same result). */
+ * non-zero; the others are skipped (the same sums in the same order: the same result). The
+ * dense branch stays for the pose-only update: indexing through cols there cost rigpose-sim's
+ * synchronised stereo4 17 % more instructions (callgrind). */
 static rp_real maha_d(const rp_real *H, const rp_real *C, int D, const int8_t *cols, int nc,
                       rp_real s2, const rp_real *Rx, const rp_real r[2])
 {
