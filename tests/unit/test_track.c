@@ -692,6 +692,58 @@ static void test_vector_equals_scalar(void **s)
     assert_true(total > 500);
 }
 
+/* The patch cache (rp_tracker_t) changes no result: a tracker whose cache is emptied before
+ * every frame gives the same tracks, ids and counts bit for bit, over sub-pixel and large shifts
+ * (the full-pyramid path), a blank frame and top-ups; and the cache is used. */
+static void test_patch_cache_changes_nothing(void **s)
+{
+    (void)s;
+    static rp_tracker_t ta, tb;
+    static rp_feat_t fa[RP_MAX_FEATS_PER_CAM], fb[RP_MAX_FEATS_PER_CAM];
+    static const double shift[][2] = {{0, 0},      {0.37, -0.21}, {1.1, 0.4},  {3.9, 2.2},
+                                      {-8.7, 5.3}, {-8.2, 5.9},   {0.1, 9.05}, {-30.5, 1.25},
+                                      {-31.0, 2.0}, {-29.6, 3.1}};
+    texture_t t;
+    texture_make(&t);
+    rp_track_cfg_t cfg;
+    assert_ok(rp_track_default_cfg(&cfg));
+    assert_ok(rp_track_init(&ta, &cfg));
+    assert_ok(rp_track_init(&tb, &cfg));
+    assert_true(ta.n_slots >= cfg.target);
+    int total = 0, cached = 0;
+    for (unsigned k = 0; k < sizeof(shift) / sizeof(shift[0]) + 1; ++k) {
+        if (k == 5) {
+            memset(img1, 77, sizeof(img1)); /* blank: skipped by both */
+        } else {
+            const unsigned j = k < 5 ? k : k - 1;
+            render(&t, shift[j][0], shift[j][1], img1);
+        }
+        const rp_image_t im = view(img1, W, H);
+        uint16_t na = 0, nb = 0;
+        rp_track_info_t ia, ib;
+        memset(tb.slot_key, 0, sizeof(tb.slot_key));
+        const rp_status_t sa =
+            rp_track_process(&ta, &im, (int64_t)k * 33000, fa, RP_MAX_FEATS_PER_CAM, &na, &ia);
+        const rp_status_t sb =
+            rp_track_process(&tb, &im, (int64_t)k * 33000, fb, RP_MAX_FEATS_PER_CAM, &nb, &ib);
+        assert_int_equal(sa, sb);
+        assert_int_equal(na, nb);
+        assert_int_equal(ib.n_cached, 0);
+        cached += ia.n_cached;
+        ia.n_cached = 0;
+        assert_memory_equal(&ia, &ib, sizeof(ia));
+        for (int i = 0; i < na; ++i) {
+            assert_int_equal(fa[i].id, fb[i].id);
+            assert_true(fa[i].uv[0] == fb[i].uv[0] && fa[i].uv[1] == fb[i].uv[1]);
+        }
+        assert_memory_equal(ta.pos_q16, tb.pos_q16, sizeof(ta.pos_q16[0]) * ta.n);
+        total += na;
+    }
+    print_message("patch cache: %d of %d tracks started from a cached patch, results equal\n",
+                  cached, total);
+    assert_true(total > 500 && cached > total / 2);
+}
+
 /* Feeding a tracker as rp_pipe does for a pair's second camera: adopted features become tracks
  * at their (Q16-rounded) pixels, only the owner camera's ids survive keep_owned, drop_ids takes
  * out the listed ones (rp_pipe: a pair's new features left unmatched), and the next serial says
@@ -825,13 +877,16 @@ static void test_weights_every_subpixel_pair(void **s)
     }
 }
 
-/* The tracker's state: two pyramids and small row rings, no full-frame response map. */
+/* The tracker's state: two pyramids, the patch cache and small row rings, no full-frame
+ * response map. */
 static void test_state_size(void **s)
 {
     (void)s;
-    print_message("sizeof(rp_tracker_t) = %zu bytes (pyramids %zu)\n", sizeof(rp_tracker_t),
-                  2 * sizeof(rp_pyr_t));
-    assert_true(sizeof(rp_tracker_t) < 2 * sizeof(rp_pyr_t) + 128 * 1024);
+    print_message("sizeof(rp_tracker_t) = %zu bytes (pyramids %zu, patch cache %zu)\n",
+                  sizeof(rp_tracker_t), 2 * sizeof(rp_pyr_t),
+                  sizeof(trk.slot_pix) + sizeof(trk.slot_key));
+    assert_true(sizeof(rp_tracker_t) <
+                2 * sizeof(rp_pyr_t) + sizeof(trk.slot_pix) + sizeof(trk.slot_key) + 128 * 1024);
 }
 
 int main(void)
@@ -858,6 +913,7 @@ int main(void)
         cmocka_unit_test(test_weights_every_subpixel_pair),
         cmocka_unit_test(test_state_size),
         cmocka_unit_test(test_vector_equals_scalar),
+        cmocka_unit_test(test_patch_cache_changes_nothing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -82,6 +82,14 @@ typedef double rp_real;
 #define RP_TRACK_MAX_WIN 31
 #endif
 
+/* Per tracker, bytes of the cache of level-0 Lucas-Kanade patches (rp_track.h, rp_tracker_t):
+ * a track whose patch is cached skips one patch of its next frame. Each slot holds
+ * 3 x win x (win rounded up to 8) int16 (3,024 bytes at the default 21); tracks past the slots
+ * are tracked the same way, only slower. 0: no cache. */
+#ifndef RP_TRACK_PATCH_CACHE_BYTES
+#define RP_TRACK_PATCH_CACHE_BYTES (160 * 3024)
+#endif
+
 /* Detection: largest bucketing grid (cells) and candidates kept per cell. */
 #ifndef RP_TRACK_MAX_CELLS
 #define RP_TRACK_MAX_CELLS 64

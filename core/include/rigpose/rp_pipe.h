@@ -35,10 +35,11 @@
  * track lost) detects at once. Detection and the matching of the new features are the frame
  * set's rare, large costs: taking turns keeps them from landing on the same frame set.
  *
- * Memory: rp_pipe_t holds RP_PIPE_MAX_TRACKERS trackers (each two pyramids and a response map
- * at the tracker's size limits: sizeof(rp_tracker_t) is 0.90 MB at the default 640x480), each
- * stereo pair's matcher and scratch, and the estimator: 6.3 MB in all with double rp_real,
- * 5.1 MB with float (sizeof at the default limits). Allocate it statically
+ * Memory: rp_pipe_t holds RP_PIPE_MAX_TRACKERS trackers (each two pyramids, row rings and a
+ * patch cache at the tracker's size limits: sizeof(rp_tracker_t) is 1.40 MB at the default
+ * 640x480, 0.50 MB of it the cache, RP_TRACK_PATCH_CACHE_BYTES), each stereo pair's matcher and
+ * scratch, and the estimator: 8.6 MB in all with double rp_real, 7.2 MB with float (sizeof at
+ * the default limits). Allocate it statically
  * (`static rp_pipe_t pipe;`).
  *
  * Feature-level input: rp_pipe_step_feats runs the layout's estimator on a frame set built

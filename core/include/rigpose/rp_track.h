@@ -86,6 +86,7 @@ typedef struct {
     uint16_t n_lost;    /* dropped otherwise (left the image, low texture, LK out of bounds) */
     uint16_t n_reset;   /* tracks that passed but were dropped by the reset (RP_TRACK_RESET) */
     uint16_t n_new;     /* new features */
+    uint16_t n_cached;  /* tracks whose first patch came from the patch cache (rp_tracker_t) */
 } rp_track_info_t;
 
 /* One level of a pyramid inside a tracker's buffer. */
@@ -135,7 +136,16 @@ static inline int rp_track_serial_since(uint32_t s, uint32_t k)
     return ((s - k) & RP_TRACK_SERIAL_MASK) <= (RP_TRACK_SERIAL_MASK >> 1);
 }
 
-/* Per-camera tracker. Large (two pyramids, about 0.85 MB at 640x480): allocate it statically. */
+/* A cached level-0 patch's key: the image (rp_tracker_t.pyr_gen) and the level-0 position
+ * (Q16 px) it was taken at, and the structure tensor of its gradients. */
+typedef struct {
+    uint32_t gen;     /* 0: empty */
+    int32_t key[2];
+    int64_t A[3];     /* sum Ix^2, Ix Iy, Iy^2 */
+} rp_track_patch_key_t;
+
+/* Per-camera tracker. Large (two pyramids, about 0.85 MB at 640x480, and the patch cache):
+ * allocate it statically. */
 typedef struct {
     rp_track_cfg_t cfg;
     rp_pyr_t pyr[2];
@@ -160,6 +170,16 @@ typedef struct {
     /* scratch of tracking: level-0 displacement of track k over the last frame, Q16 px (valid for
      * the tracks that survived it; the flow guess of the tracks after it in the same frame) */
     int32_t flow_q16[RP_MAX_FEATS_PER_CAM][2];
+    /* Patch cache. The backward check of a track takes the level-0 patch (grey levels and
+     * gradients) of the current image at the track's new position, which is exactly the patch
+     * the next frame's forward pass starts from: slot k keeps the one of the track that ends up
+     * at index k, found again only if its key (image generation, position) matches, so a hit
+     * gives the same numbers as recomputing (the cache changes no result). */
+    uint32_t pyr_gen[2];   /* generation of each pyramid's image (0: none) */
+    uint32_t gen_next;     /* last generation given */
+    uint16_t n_slots;      /* slots at cfg.win (rp_track_init) */
+    rp_track_patch_key_t slot_key[RP_MAX_FEATS_PER_CAM];
+    int16_t slot_pix[RP_TRACK_PATCH_CACHE_BYTES / 2 > 0 ? RP_TRACK_PATCH_CACHE_BYTES / 2 : 1];
 } rp_tracker_t;
 
 /* Defaults like OpenCV's: 21x21 window, 4 levels (maxLevel 3), 30 iterations, eps 0.01 px,

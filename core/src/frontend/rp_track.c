@@ -195,6 +195,14 @@ rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg)
     }
     trk->cur = 0;
     trk->has_prev = 0;
+    trk->pyr_gen[0] = trk->pyr_gen[1] = 0;
+    trk->gen_next = 0;
+    {
+        const uint32_t per = 3u * cfg->win * ((cfg->win + 7u) & ~7u); /* rows padded to 8 */
+        const uint32_t k = (uint32_t)(RP_TRACK_PATCH_CACHE_BYTES / 2) / per;
+        trk->n_slots = (uint16_t)(k < RP_MAX_FEATS_PER_CAM ? k : RP_MAX_FEATS_PER_CAM);
+        memset(trk->slot_key, 0, sizeof(trk->slot_key));
+    }
     trk->utime = 0;
     trk->next_k = 0;
     trk->n = 0;
@@ -433,6 +441,16 @@ static void lk_sample(lk_scratch_t *s, const uint8_t *J, int wJ, int hJ, int jx,
     interp_q7_q3(src, ss, win, wp, wp, wj, 2, s->Jv, NULL);
 }
 
+/* One slot of the tracker's patch cache (rp_tracker_t) as lk_point sees it: I's level-0 patch at
+ * p_q16 is taken from the slot if its key matches (use), or stored there (store). */
+typedef struct {
+    rp_track_patch_key_t *key;
+    int16_t *pix; /* Iv, Ix, Iy: 3 x win x wp */
+    uint32_t gen; /* generation of I */
+    int store;    /* 0: use on a match; 1: store */
+    int hit;      /* set to 1 when used */
+} lk_cache_t;
+
 /* Offset (Q16) that moves fractional part f (Q16) to the nearest 1/128 px. */
 static int32_t round_q7_off(int32_t f) { return (((f + 256) >> 9) << 9) - f; }
 
@@ -445,7 +463,7 @@ static int32_t round_q7_off(int32_t f) { return (((f + 256) >> 9) << 9) - f; }
  * singular at level 0, residual above cfg.max_err_q5). */
 static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_t *pJ, int n_lev,
                     const int32_t p_q16[2], const int32_t *g_q16, int res_check,
-                    int32_t q_q16[2])
+                    lk_cache_t *cache, int32_t q_q16[2])
 {
     const int win = cfg->win, half = (cfg->win - 1) / 2, wp = WPAD(cfg->win);
     const int area = win * win;
@@ -492,14 +510,39 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
             }
             continue;
         }
-        v8_t wt[4];
-        weights_q7(ox & 0xffff, oy & 0xffff, wt);
-        lk_patch(&s, I, wI, hI, ix, iy, win, wt);
+        /* I's patch: from the cache at level 0 when it holds this image's at p (the same
+         * numbers), else computed (and stored if asked) */
+        const int16_t *Iv = s.Iv, *Ix = s.Ix, *Iy = s.Iy;
+        int64_t A11, A12, A22;
+        if (l == 0 && cache != NULL && !cache->store && cache->key->gen == cache->gen &&
+            cache->key->key[0] == p_q16[0] && cache->key->key[1] == p_q16[1]) {
+            cache->hit = 1;
+            Iv = cache->pix;
+            Ix = Iv + win * wp;
+            Iy = Ix + win * wp;
+            A11 = cache->key->A[0];
+            A12 = cache->key->A[1];
+            A22 = cache->key->A[2];
+        } else {
+            v8_t wt[4];
+            weights_q7(ox & 0xffff, oy & 0xffff, wt);
+            lk_patch(&s, I, wI, hI, ix, iy, win, wt);
+            sum_sq3(s.Ix, s.Iy, win * wp, &A11, &A12, &A22);
+            if (l == 0 && cache != NULL && cache->store) {
+                memcpy(cache->pix, s.Iv, sizeof(int16_t) * (size_t)(win * wp));
+                memcpy(cache->pix + win * wp, s.Ix, sizeof(int16_t) * (size_t)(win * wp));
+                memcpy(cache->pix + 2 * win * wp, s.Iy, sizeof(int16_t) * (size_t)(win * wp));
+                cache->key->gen = cache->gen;
+                cache->key->key[0] = p_q16[0];
+                cache->key->key[1] = p_q16[1];
+                cache->key->A[0] = A11;
+                cache->key->A[1] = A12;
+                cache->key->A[2] = A22;
+            }
+        }
         /* the patch sits at the position rounded to 1/128 px: track that point, then move the
          * result back by the rounding (a translation locally) */
         const int32_t qx = round_q7_off(ox & 0xffff), qy = round_q7_off(oy & 0xffff);
-        int64_t A11, A12, A22;
-        sum_sq3(s.Ix, s.Iy, win * wp, &A11, &A12, &A22);
         /* Texture test: min eigenvalue of A / area vs cfg.min_eig (OpenCV's units x 2^20, A in
          * Scharr^2 like OpenCV before its 2^-20 scale). Work with A >> s < 2^25. */
         {
@@ -539,7 +582,7 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
             lk_sample(&s, J, wJ, hJ, jx, jy, win, wj);
             iterated = 1;
             int64_t b1, b2;
-            sum_mismatch(s.Jv, s.Iv, s.Ix, s.Iy, win * wp, &b1, &b2);
+            sum_mismatch(s.Jv, Iv, Ix, Iy, win * wp, &b1, &b2);
             /* delta = -A^-1 b (px: Q5 x Scharr over Scharr^2 x 32 = px). Scale A, b by 2^-sh so
              * all < 2^22: det < 2^44, numerators < 2^45, times 2^16 < 2^61 (no overflow). */
             int sh = 0;
@@ -573,7 +616,7 @@ static int lk_point(const rp_track_cfg_t *cfg, const rp_pyr_t *pI, const rp_pyr_
         ny -= qy;
         if (l == 0 && iterated && res_check) {
             /* residual of the last iteration, over the window's real columns */
-            res_last = sum_absdiff(s.Jv, s.Iv, s.mask, win, wp);
+            res_last = sum_absdiff(s.Jv, Iv, s.mask, win, wp);
         }
     }
     q_q16[0] = nx;
@@ -919,13 +962,15 @@ static int detect(rp_tracker_t *trk, int want)
 enum { TRACK_OK, TRACK_LOST, TRACK_LEFT, TRACK_LOST_FB };
 
 /* Tracks level-0 position p from pyramid P into C over the n_lev finest levels, starting from
- * displacement g (Q16 px; NULL: zero), then checks it backward. *f: the forward result, inside
+ * displacement g (Q16 px; NULL: zero), then checks it backward; use / store (NULL: none): the
+ * cache slots of P's patch at p and of C's at f (lk_cache_t). *f: the forward result, inside
  * [0, wq] x [0, hq] (Q16 px) when TRACK_OK. Returns TRACK_OK, TRACK_LOST (lost forward),
  * TRACK_LEFT (tracked out of the image) or TRACK_LOST_FB (the backward check failed). */
 static int track_fb(const rp_track_cfg_t *cfg, const rp_pyr_t *P, const rp_pyr_t *C, int n_lev,
-                    const int32_t p[2], const int32_t *g, int32_t wq, int32_t hq, int32_t f[2])
+                    const int32_t p[2], const int32_t *g, int32_t wq, int32_t hq,
+                    lk_cache_t *use, lk_cache_t *store, int32_t f[2])
 {
-    if (!lk_point(cfg, P, C, n_lev, p, g, cfg->fb_max_q16 == 0, f)) {
+    if (!lk_point(cfg, P, C, n_lev, p, g, cfg->fb_max_q16 == 0, use, f)) {
         return TRACK_LOST;
     }
     if (f[0] < 0 || f[1] < 0 || f[0] > wq || f[1] > hq) {
@@ -936,7 +981,7 @@ static int track_fb(const rp_track_cfg_t *cfg, const rp_pyr_t *P, const rp_pyr_t
     }
     const int32_t back[2] = {p[0] - f[0], p[1] - f[1]};
     int32_t b[2];
-    if (!lk_point(cfg, C, P, BACK_LEVELS, f, back, 1, b)) {
+    if (!lk_point(cfg, C, P, BACK_LEVELS, f, back, 1, store, b)) {
         return TRACK_LOST_FB;
     }
     const int64_t dx = (int64_t)b[0] - p[0], dy = (int64_t)b[1] - p[1];
@@ -1026,10 +1071,13 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
         return RP_E_DEGENERATE;
     }
     const uint8_t nxt = (uint8_t)(trk->cur ^ 1u);
+    trk->pyr_gen[nxt] = 0; /* no cached patch is of this pyramid until it is built */
     st = rp_pyr_build(&trk->pyr[nxt], img, trk->cfg.levels);
     if (st != RP_OK) {
         return st;
     }
+    trk->gen_next = trk->gen_next + 1u == 0u ? 1u : trk->gen_next + 1u;
+    trk->pyr_gen[nxt] = trk->gen_next;
     if (trk->has_prev) {
         const rp_pyr_t *P = &trk->pyr[trk->cur], *C = &trk->pyr[nxt];
         const int32_t wq = (int32_t)(img->w - 1) * Q16, hq = (int32_t)(img->h - 1) * Q16;
@@ -1048,12 +1096,28 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
             int32_t f[2];
             int r = TRACK_LOST;
             int32_t g[2];
+            /* the cache: P's patch at p in slot i (stored by the last frame's backward check),
+             * C's at f into slot fs.n, the index the track takes if it passes */
+            lk_cache_t use = {NULL, NULL, trk->pyr_gen[trk->cur], 0, 0};
+            lk_cache_t store = {NULL, NULL, trk->pyr_gen[nxt], 1, 0};
+            const uint32_t per = 3u * cfg->win * WPAD(cfg->win);
+            if (i < trk->n_slots) {
+                use.key = &trk->slot_key[i];
+                use.pix = trk->slot_pix + (size_t)i * per;
+            }
+            if (fs.n < trk->n_slots) {
+                store.key = &trk->slot_key[fs.n];
+                store.pix = trk->slot_pix + (size_t)fs.n * per;
+            }
+            lk_cache_t *pu = use.key != NULL ? &use : NULL;
+            lk_cache_t *ps = store.key != NULL ? &store : NULL;
             if (fs.n >= GUESS_MIN && flow_guess(trk, &fs, p, cx, cy, g)) {
-                r = track_fb(cfg, P, C, 1, p, g, wq, hq, f);
+                r = track_fb(cfg, P, C, 1, p, g, wq, hq, pu, ps, f);
             }
             if (r == TRACK_LOST || r == TRACK_LOST_FB) {
-                r = track_fb(cfg, P, C, cfg->levels, p, NULL, wq, hq, f);
+                r = track_fb(cfg, P, C, cfg->levels, p, NULL, wq, hq, pu, ps, f);
             }
+            inf.n_cached = (uint16_t)(inf.n_cached + use.hit);
             if (r != TRACK_OK) {
                 inf.n_lost_fb = (uint16_t)(inf.n_lost_fb + (r == TRACK_LOST_FB));
                 inf.n_lost = (uint16_t)(inf.n_lost + (r != TRACK_LOST_FB));
