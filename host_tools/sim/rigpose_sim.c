@@ -707,7 +707,71 @@ typedef struct {
      * OFF_CHECK_FRAME ([0]) and at the last frame ([1]): sum, largest, count */
     double off_sum[2], off_max[2];
     uint32_t n_off[2];
+    /* consistency of the published covariance (rp_estimate_t.cov) on the frames stepped OK:
+     * sums of the normalised estimation error squared e^T C^-1 e, e = truth [-] estimate in
+     * the pose chart (rp_rig.h), over the pose (6 dof), the translation block (3) and the
+     * rotation block (3); nees_n frames, nees_bad of them with a covariance not positive
+     * definite (not in the sums) */
+    double nees_sum[3];
+    uint32_t nees_n, nees_bad;
 } run_result_t;
+
+/* e^T C^-1 e for the n x n block of the 6x6 covariance c starting at row / column o, by
+ * Cholesky in double; -1 if that block is not positive definite. */
+static double nees_block(const rp_real c[36], const double e[6], int o, int n)
+{
+    double L[36], y[6];
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j <= i; ++j) {
+            double acc = (double)c[(o + i) * 6 + o + j];
+            for (int k = 0; k < j; ++k) {
+                acc -= L[i * 6 + k] * L[j * 6 + k];
+            }
+            if (i == j) {
+                if (!(acc > 0.0)) {
+                    return -1.0;
+                }
+                L[i * 6 + i] = sqrt(acc);
+            } else {
+                L[i * 6 + j] = acc / L[j * 6 + j];
+            }
+        }
+    }
+    double q = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double acc = e[o + i];
+        for (int k = 0; k < i; ++k) {
+            acc -= L[i * 6 + k] * y[k];
+        }
+        y[i] = acc / L[i * 6 + i];
+        q += y[i] * y[i];
+    }
+    return q;
+}
+
+/* Adds frame's NEES (estimate est against the true pose truth[6]) to res. */
+static void score_nees(const rp_estimate_t *est, const double truth[6], run_result_t *res)
+{
+    rp_real t[6], d[6];
+    for (int c = 0; c < 6; ++c) {
+        t[c] = (rp_real)truth[c];
+    }
+    rp_pose_minus(t, est->p, d); /* truth = est [+] d */
+    double e[6];
+    for (int c = 0; c < 6; ++c) {
+        e[c] = (double)d[c];
+    }
+    const double q6 = nees_block(est->cov, e, 0, 6), qt = nees_block(est->cov, e, 0, 3),
+                 qr = nees_block(est->cov, e, 3, 3);
+    res->nees_n += 1;
+    if (q6 < 0.0 || qt < 0.0 || qr < 0.0 || !isfinite(q6)) {
+        res->nees_bad += 1;
+        return;
+    }
+    res->nees_sum[0] += q6;
+    res->nees_sum[1] += qt;
+    res->nees_sum[2] += qr;
+}
 
 /* The frame at which the estimated clock offsets are scored (issue 15: within 0.5 ms of the
  * truth after 50 frames). */
@@ -858,6 +922,9 @@ static void *worker(void *arg)
                     continue; /* frame 0 defines the world */
                 }
                 res->lost += st != RP_OK;
+                if (st == RP_OK) {
+                    score_nees(&est, truth, res);
+                }
                 for (int c = 0; c < 3; ++c) {
                     res->err_sum[c] += fabs((double)est.p[c] - truth[c]);
                 }
@@ -925,6 +992,9 @@ typedef struct {
     double off_mean[2], off_max[2]; /* --estimate-offsets (run_result_t): mean and largest
                                      * |offset error|, ms, at OFF_CHECK_FRAME and the last */
     uint64_t n_off[2];
+    double nees[3];          /* mean NEES over the frames stepped OK: pose, translation,
+                              * rotation (run_result_t) */
+    uint64_t nees_n, nees_bad;
 } summary_t;
 
 static int cmp_double(const void *a, const void *b)
@@ -985,6 +1055,18 @@ static void summarise(const opts_t *o, const run_result_t *res, double *scratch,
             s->n_off[k] += res[r].n_off[k];
         }
         s->off_mean[k] = s->n_off[k] ? sum / (double)s->n_off[k] : 0.0;
+    }
+    double ns3[3] = {0.0, 0.0, 0.0};
+    for (uint32_t r = 0; r < o->runs; ++r) {
+        for (int k = 0; k < 3; ++k) {
+            ns3[k] += res[r].nees_sum[k];
+        }
+        s->nees_n += res[r].nees_n;
+        s->nees_bad += res[r].nees_bad;
+    }
+    const uint64_t good = s->nees_n - s->nees_bad;
+    for (int k = 0; k < 3; ++k) {
+        s->nees[k] = good ? ns3[k] / (double)good : NAN;
     }
 }
 
@@ -1047,6 +1129,11 @@ static void print_json(const opts_t *o, const summary_t *s)
             json_num("offset_err_ms_last", s[m].off_mean[1], 1);
             json_num("offset_err_ms_last_max", s[m].off_max[1], 1);
         }
+        json_num("nees", s[m].nees[0], 1);
+        json_num("nees_t", s[m].nees[1], 1);
+        json_num("nees_r", s[m].nees[2], 1);
+        printf("\"nees_frames\": %llu, \"nees_not_pd\": %llu, ",
+               (unsigned long long)s[m].nees_n, (unsigned long long)s[m].nees_bad);
         json_num("worst_run_tx", s[m].worst_run[0], 1);
         json_num("median_run_tx", s[m].median_run[0], 1);
         printf("\"worst_run_index\": %u}", s[m].worst_run_tx);
@@ -1135,6 +1222,10 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
         printf("\n");
         print_cols("per-run mean, worst", s[m].worst_run, "%10.6f");
         printf("  (worst tx: run %u)\n", s[m].worst_run_tx);
+        printf("  %-22s%10.3g%10.3g%10.3g  (mean; 6, 3, 3 for a consistent covariance; %llu "
+               "frames, %llu not positive definite)\n",
+               "NEES: pose, t, rotation", s[m].nees[0], s[m].nees[1], s[m].nees[2],
+               (unsigned long long)(s[m].nees_n), (unsigned long long)s[m].nees_bad);
         if (s[m].n_off[0] > 0 || s[m].n_off[1] > 0) {
             printf("  %-22s%10.3f%10.3f  (ms, |estimated - true| offset to cam1 of the %llu "
                    "state cameras x runs)\n  %-22s%10.3f%10.3f\n",
