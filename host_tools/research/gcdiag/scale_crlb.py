@@ -14,6 +14,12 @@ least-squares scale of the translations (g) and the poses' covariance C.
       a whole run: every 10 frames each camera gets N new landmarks that live L frames
   scale_crlb.py window [--seed S] [--window W] [--stride K] [--per-cam N]
       one window of W frames, keyframes every K frames, N landmarks per camera (rp_gcba's case)
+  scale_crlb.py euroc --data DIR [--first F] [--frames N] [--life L] [--births N]
+                      [--depth MIN MAX] [--sigma PX] [--seed S]
+      a EuRoC clip's two cameras as a non-overlapping rig (issue 16): the clip's ground-truth
+      body poses at cam0's stamps, each camera's T_BS and focal length; the scene is not known,
+      so landmarks are drawn per camera every 10 frames at uniform pixels and depths in
+      [MIN, MAX] m (default 2 5: the machine hall) and live L frames while in view
 
 Prints the scale's standard deviation in percent. numpy (PyPI, installed into .venv by
 scripts/install-deps.sh). Not a test; the figures are quoted in host_tools/research/gcdiag/README.md.
@@ -164,6 +170,82 @@ def window_bound(a):
           " scale sd %.2f %%" % (a.window, a.stride, a.per_cam, nobs, 100 * sd))
 
 
+def euroc_rig(data):
+    """cam0's and cam1's (position, rotation) in the body frame (T_BS) and their focal lengths,
+    image size from cam0."""
+    cams, focal = [], []
+    for c in ("cam0", "cam1"):
+        txt = open("%s/%s/sensor.yaml" % (data, c)).read()
+        blk = txt[txt.index("T_BS"):]
+        vals = blk[blk.index("[") + 1:blk.index("]")].replace("\n", " ").split(",")
+        T = np.array([float(v) for v in vals]).reshape(4, 4)
+        cams.append((T[:3, 3], T[:3, :3]))
+        intr = txt[txt.index("intrinsics:"):]
+        fu = float(intr[intr.index("[") + 1:intr.index("]")].split(",")[0])
+        focal.append(fu)
+        if c == "cam0":
+            res = txt[txt.index("resolution:"):]
+            w, h = [int(v) for v in res[res.index("[") + 1:res.index("]")].split(",")]
+    return cams, float(np.mean(focal)), w, h
+
+
+def quat_R(qx, qy, qz, qw):
+    return np.array([[1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
+                     [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
+                     [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]])
+
+
+def euroc_bound(a):
+    global CAMS, FOCAL, WIDTH, HEIGHT, SIGMA
+    CAMS, FOCAL, WIDTH, HEIGHT = euroc_rig(a.data)
+    SIGMA = a.sigma
+    stamps = [int(l.split(",")[0]) * 1e-9 for l in open("%s/cam0/data.csv" % a.data)
+              if l[0].isdigit()][a.first:a.first + a.frames]
+    gt = np.array([[float(v) for v in l.split()] for l in open("%s/groundtruth.txt" % a.data)
+                   if l[0].isdigit()])
+    d, R = [], []
+    for t in stamps:
+        g = gt[np.argmin(np.abs(gt[:, 0] - t))]
+        d.append(g[1:4])
+        R.append(quat_R(*g[4:8]))
+    d, R = np.array(d), np.array(R)
+    # the first frame's body pose is the world (held); positions relative to it
+    R0 = R[0].copy()
+    d = (d - d[0]) @ R0
+    R = np.array([R0.T @ Rf for Rf in R])
+    n = len(stamps)
+    rng = np.random.default_rng(a.seed)
+    A = np.zeros((6 * (n - 1), 6 * (n - 1)))
+    col = lambda f: 6 * (f - 1) if f > 0 else -1  # noqa: E731
+    nobs = nlm = 0
+    for k in range(len(CAMS)):
+        Dk, Rk = CAMS[k]
+        for b in range(0, n - 1, 10):
+            for _ in range(a.births):
+                u, v = rng.uniform(0, WIDTH), rng.uniform(0, HEIGHT)
+                z = rng.uniform(a.depth[0], a.depth[1])
+                Pc = np.array([(u - WIDTH / 2) / FOCAL * z, (v - HEIGHT / 2) / FOCAL * z, z])
+                M = d[b] + R[b] @ (Dk + Rk @ Pc)
+                seen = []
+                for f in range(b, min(n, b + a.life)):
+                    if not visible(cam_point(M, d[f], R[f], k)):
+                        break
+                    seen.append(f)
+                got = add_landmark(A, M, k, seen, d, R, col)
+                nobs += got
+                nlm += got > 0
+    path = float(np.sum(np.linalg.norm(np.diff(d, axis=0), axis=1)))
+    ang = [np.degrees(np.arccos(np.clip((np.trace(R[f - 1].T @ R[f]) - 1) / 2, -1, 1)))
+           for f in range(1, n)]
+    sd = scale_sd(A, d, list(range(n)), col)
+    print("euroc: frames %d-%d, %d cameras %.3f m apart, focal %.1f px, sigma %.2f px, path "
+          "%.2f m, rotation %.1f deg/frame mean; %d landmarks at %g-%g m living %d frames, %d "
+          "observations: scale sd %.2f %%" % (a.first, a.first + n - 1, len(CAMS),
+                                              float(np.linalg.norm(CAMS[1][0] - CAMS[0][0])),
+                                              FOCAL, SIGMA, path, float(np.mean(ang)), nlm,
+                                              a.depth[0], a.depth[1], a.life, nobs, 100 * sd))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="mode", required=True)
@@ -178,8 +260,17 @@ def main():
     w.add_argument("--window", type=int, default=24)
     w.add_argument("--stride", type=int, default=4)
     w.add_argument("--per-cam", type=int, default=80)
+    e = sub.add_parser("euroc")
+    e.add_argument("--data", required=True)
+    e.add_argument("--first", type=int, default=0)
+    e.add_argument("--frames", type=int, default=150)
+    e.add_argument("--life", type=int, default=29)
+    e.add_argument("--births", type=int, default=50)
+    e.add_argument("--depth", type=float, nargs=2, default=[2.0, 5.0])
+    e.add_argument("--sigma", type=float, default=0.5)
+    e.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
-    (run_bound if a.mode == "run" else window_bound)(a)
+    {"run": run_bound, "window": window_bound, "euroc": euroc_bound}[a.mode](a)
 
 
 if __name__ == "__main__":
