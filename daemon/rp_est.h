@@ -24,7 +24,7 @@
 #include "rigpose/rp_pool.h"
 
 typedef struct {
-    rp_pipe_t pipe; /* 5.1-6.3 MB at the default limits: keep an rp_est_t static */
+    rp_pipe_t pipe; /* 7.2-8.6 MB at the default limits: keep an rp_est_t static */
     rp_pool_t pool;
     const rp_image_t *const *images; /* the set being tracked (read by the jobs) */
     uint8_t order[RP_PIPE_MAX_TRACKERS]; /* trackers in the order their jobs go out */

@@ -4,8 +4,8 @@
 # rigpose-sim scores every frame a method stepped OK by e^T C^-1 e, e = truth [-] estimate in
 # the pose chart, C = rp_estimate_t.cov (the filter's covariance plus gc's consider terms for
 # the map's correlated errors, rp_vo_gc.h step 5). Those terms were set on seed 1 (Table 1);
-# NEES_SEED (host_tools/sim/sim.mk, chosen after them) is fresh. The filter's own covariance
-# without them gives a NEES of thousands, so the test can fail.
+# NEES_SEED (host_tools/sim/sim.mk, chosen after them) is fresh. With the terms zeroed
+# (scale_sigma, trans_drift_sigma, rot_drift_sigma) the same run gives 446, so the test can fail.
 set -u
 BUILD=${BUILD:-build}
 . "$(dirname "$0")/../../tests/script_env.sh"

@@ -144,7 +144,7 @@ typedef struct {
     int64_t A[3];     /* sum Ix^2, Ix Iy, Iy^2 */
 } rp_track_patch_key_t;
 
-/* Per-camera tracker. Large (two pyramids, about 0.85 MB at 640x480, and the patch cache):
+/* Per-camera tracker. Large (two pyramids, about 0.82 MB at 640x480, and the patch cache, 0.5 MB):
  * allocate it statically. */
 typedef struct {
     rp_track_cfg_t cfg;

@@ -1076,7 +1076,12 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
     if (st != RP_OK) {
         return st;
     }
-    trk->gen_next = trk->gen_next + 1u == 0u ? 1u : trk->gen_next + 1u;
+    if (++trk->gen_next == 0u) {
+        /* wrapped (after 2^32 images): no slot may keep a generation that comes round again
+         * (emptied slots have generation 0, which no built pyramid has) */
+        memset(trk->slot_key, 0, sizeof(trk->slot_key));
+        trk->gen_next = 1u;
+    }
     trk->pyr_gen[nxt] = trk->gen_next;
     if (trk->has_prev) {
         const rp_pyr_t *P = &trk->pyr[trk->cur], *C = &trk->pyr[nxt];
