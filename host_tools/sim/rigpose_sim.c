@@ -335,6 +335,8 @@ typedef struct {
     double cam_offset_ms[RP_SIM_NCAMS], cam_phase_ms[RP_SIM_NCAMS], cam_fps[RP_SIM_NCAMS];
     double cam_offset_s[RP_SIM_NCAMS]; /* cam_offset_ms in s */
     double jitter_ms;
+    double outliers;          /* --outliers FRAC: share of every camera's features replaced by
+                               * uniform pixels, drawn anew every frame (0: none) */
     int clocks_given;
     double max_rot;           /* --max-rot DEG (rad here): fail above it; 0: no check */
     int64_t trace_run;        /* --trace R: per-frame lines of run R on stderr; -1: none, -2: all */
@@ -386,6 +388,10 @@ static void usage(FILE *out, const char *argv0)
             "                   turn's angle and the true beta (deg), per method its status,\n"
             "                   geodesic rotation error (deg), |tx| (m) and its flags (hex,\n"
             "                   rp_frame.h RP_EST_*)\n"
+            "  --outliers FRAC  gross outliers: each feature of every camera is, with\n"
+            "                   probability FRAC (0..1), replaced by a pixel uniform over the\n"
+            "                   image, drawn anew every frame from the run's seed (the same for\n"
+            "                   every method)\n"
             "  --threads N      worker threads (default: online CPUs)\n"
             "  --ekf-iterations N  Gauss-Newton iterations of the EKF update (default 3;\n"
             "                   1 = the plain EKF), for ablation\n"
@@ -644,6 +650,8 @@ static int parse_args(int argc, char **argv, opts_t *o)
         } else if (strcmp(name, "--jitter-ms") == 0) {
             bad = parse_double(val, 0.0, 100.0, &o->jitter_ms);
             o->clocks_given = 1;
+        } else if (strcmp(name, "--outliers") == 0) {
+            bad = parse_double(val, 0.0, 1.0, &o->outliers);
         } else if (strcmp(name, "--seed") == 0) {
             bad = parse_u64(val, &o->seed);
         } else if (strcmp(name, "--focal-px") == 0) {
@@ -804,6 +812,20 @@ typedef struct {
     char why[160];
 } job_t;
 
+/* --outliers: each feature of every camera replaced, with probability frac, by a pixel uniform
+ * over the image (issue 14's gross outliers). */
+static void gross_outliers(rp_frameset_t *fs, const rp_sim_cfg_t *cfg, double frac, rp_rng_t *rng)
+{
+    for (int c = 0; c < RP_MAX_CAMS; ++c) {
+        for (uint16_t i = 0; i < fs->n[c]; ++i) {
+            if (rp_rng_uniform(rng) < frac) {
+                fs->f[c][i].uv[0] = (rp_real)(cfg->width * rp_rng_uniform(rng));
+                fs->f[c][i].uv[1] = (rp_real)(cfg->height * rp_rng_uniform(rng));
+            }
+        }
+    }
+}
+
 static double wrap_angle(double x)
 {
     x = fmod(x + SIM_PI, 2.0 * SIM_PI);
@@ -882,6 +904,8 @@ static void *worker(void *arg)
             break;
         }
         rp_sim_run_t sr;
+        rp_rng_t out_rng; /* --outliers: this run's own stream */
+        rp_rng_seed(&out_rng, o->seed * 0x9E3779B97F4A7C15ull + r + 1u);
         if (rp_sim_run_init(&sr, &job->cfg, o->seed, r) != 0) {
             job_fail(job, "out of memory%s%s", "", ""); /* the clocks were checked in main */
             break;
@@ -896,6 +920,9 @@ static void *worker(void *arg)
         }
         for (uint32_t j = 0; ok && j < o->frames; ++j) {
             (void)rp_sim_frame(&sr, j, fs); /* once, for every method */
+            if (o->outliers > 0.0) {
+                gross_outliers(fs, &job->cfg, o->outliers, &out_rng);
+            }
             const double *truth = &sr.truth[6u * j];
             const double *truth_R = &sr.truth_R[9u * j];
             /* the turn's angle (yaw, or pitch), wrapped; near +-90 degrees: the crossings */
@@ -1087,6 +1114,9 @@ static void print_json(const opts_t *o, const summary_t *s)
     if (o->motion != RP_SIM_MOTION_PAPER) {
         printf("\"motion\": \"%s\", ", motion_name(o->motion));
     }
+    if (o->outliers > 0.0) {
+        printf("\"outliers\": %.6g, ", o->outliers);
+    }
     if (o->clocks_given) {
         const struct { const char *key; const double *v; } lists[] = {
             {"cam_offsets_ms", o->cam_offset_ms}, {"cam_phase_ms", o->cam_phase_ms},
@@ -1190,6 +1220,10 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
         print_cols("frame rate (Hz)", fps, "%10.3f");
         printf("\n  capture-time jitter: Gaussian, sigma %g ms per camera frame (unknown); "
                "frame sets at the fastest camera's rate\n\n", o->jitter_ms);
+    }
+    if (o->outliers > 0.0) {
+        printf("  gross outliers: %.3g of every camera's features replaced by uniform pixels, "
+               "anew every frame\n\n", o->outliers);
     }
     if (o->ekf_iterations || o->no_refine) {
         printf("  ablation: EKF iterations %u, structure refinement %s\n\n",
