@@ -92,6 +92,7 @@ typedef struct {
     const double *known_off_s; /* --known-offsets: the true offsets configured, else NULL */
     double model_jitter_s;     /* --model-jitter: the clocks' jitter as the filters' (s), or 0 */
     int time_noise_per_feature; /* --time-noise-per-feature: rp_ekf_params_t.group_time_noise 0 */
+    int plain_update;           /* --plain-update: no 1-point RANSAC and no RANSAC re-find */
 } method_opts_t;
 
 /* --estimate-offsets, --known-offsets on a layout's filter parameters. */
@@ -138,6 +139,10 @@ static rp_vo_stereo_cfg_t stereo_cfg(const method_opts_t *o, int both_pairs)
     if (o->no_refine) {
         cfg.refine_structure = 0;
     }
+    if (o->plain_update) {
+        cfg.one_point = 0;
+        cfg.ransac = 0;
+    }
     offsets_opt(o, &cfg.ekf);
     return cfg;
 }
@@ -180,6 +185,10 @@ static rp_vo_gc_cfg_t gc_cfg(const method_opts_t *o)
     if (o->ekf_iterations) {
         cfg.ekf.iterations = (uint8_t)o->ekf_iterations;
     }
+    if (o->plain_update) {
+        cfg.one_point = 0;
+        cfg.ransac = 0;
+    }
     offsets_opt(o, &cfg.ekf);
     return cfg;
 }
@@ -211,6 +220,10 @@ static rp_vo_mono_cfg_t mono_cfg(uint8_t cam, const method_opts_t *o)
     cfg.ekf.sigma_px = (rp_real)(o->noise_px > 0.01 ? o->noise_px : 0.01);
     if (o->ekf_iterations) {
         cfg.ekf.iterations = (uint8_t)o->ekf_iterations;
+    }
+    if (o->plain_update) {
+        cfg.one_point = 0;
+        cfg.ransac = 0;
     }
     return cfg;
 }
@@ -327,6 +340,7 @@ typedef struct {
     int known_offsets;
     int model_jitter;
     int time_noise_per_feature; /* --time-noise-per-feature */
+    int plain_update;         /* --plain-update */
     int layout_study;         /* --layout-study given */
     const char *layout_file;  /* its FILE, or NULL for the built-in grid */
     int methods_given, runs_given, frames_given;
@@ -392,6 +406,8 @@ static void usage(FILE *out, const char *argv0)
             "                   probability FRAC (0..1), replaced by a pixel uniform over the\n"
             "                   image, drawn anew every frame from the run's seed (the same for\n"
             "                   every method)\n"
+            "  --plain-update   every layout's plain gated EKF update: no 1-point RANSAC, no\n"
+            "                   RANSAC re-find (one_point 0, ransac 0), for ablation\n"
             "  --threads N      worker threads (default: online CPUs)\n"
             "  --ekf-iterations N  Gauss-Newton iterations of the EKF update (default 3;\n"
             "                   1 = the plain EKF), for ablation\n"
@@ -569,6 +585,10 @@ static int parse_args(int argc, char **argv, opts_t *o)
         }
         if (strcmp(arg, "--model-jitter") == 0) {
             o->model_jitter = 1;
+            continue;
+        }
+        if (strcmp(arg, "--plain-update") == 0) {
+            o->plain_update = 1;
             continue;
         }
         if (strcmp(arg, "--time-noise-per-feature") == 0) {
@@ -881,7 +901,7 @@ static void *worker(void *arg)
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
                                o->known_offsets ? o->cam_offset_s : NULL,
                                o->model_jitter ? o->jitter_ms * 1e-3 : 0.0,
-                               o->time_noise_per_feature};
+                               o->time_noise_per_feature, o->plain_update};
     void *state[MAX_METHODS] = {NULL};
     rp_frameset_t *fs = malloc(sizeof *fs);
     rp_rig_t rig;
@@ -1117,6 +1137,9 @@ static void print_json(const opts_t *o, const summary_t *s)
     if (o->outliers > 0.0) {
         printf("\"outliers\": %.6g, ", o->outliers);
     }
+    if (o->plain_update) {
+        printf("\"plain_update\": 1, ");
+    }
     if (o->clocks_given) {
         const struct { const char *key; const double *v; } lists[] = {
             {"cam_offsets_ms", o->cam_offset_ms}, {"cam_phase_ms", o->cam_phase_ms},
@@ -1224,6 +1247,9 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
     if (o->outliers > 0.0) {
         printf("  gross outliers: %.3g of every camera's features replaced by uniform pixels, "
                "anew every frame\n\n", o->outliers);
+    }
+    if (o->plain_update) {
+        printf("  ablation: the plain gated update (no 1-point RANSAC, no re-find)\n\n");
     }
     if (o->ekf_iterations || o->no_refine) {
         printf("  ablation: EKF iterations %u, structure refinement %s\n\n",
@@ -1494,7 +1520,7 @@ static void print_deviations(const opts_t *o)
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
                                o->known_offsets ? o->cam_offset_s : NULL,
                                o->model_jitter ? o->jitter_ms * 1e-3 : 0.0,
-                               o->time_noise_per_feature};
+                               o->time_noise_per_feature, o->plain_update};
     for (unsigned i = 0; i < o->n_methods; ++i) {
         const rp_pipe_layout_t l = o->m[i]->layout;
         rp_pipe_cfg_t cfg;

@@ -39,3 +39,19 @@ $(BUILD)/bench/nees.json: $(REL)/rigpose-sim FORCE
 	    print("nees (mean, 6 / 3 / 3 for a consistent covariance):", json.dumps(f, sort_keys=True)); \
 	    json.dump(f, open(sys.argv[2], "w"), indent=1, sort_keys=True)' \
 	    $(BUILD)/bench/nees_sim.json $@
+
+# Issue 14's gross outliers on the Table 1 protocol: stereo4 and gc clean, with 30 % of every
+# camera's features uniform pixels (rigpose-sim --outliers), and the same with the plain gated
+# update (--plain-update): the ratios to the clean runs (outliers_30_<method>_<col>_ratio,
+# outliers_30_plain_...) in $(BUILD)/bench/outliers.json. Target: the defaults within 1.5.
+OUTLIER_RUNS ?= $(if $(filter 1,$(QUICK)),5,50)
+OUTLIER_SIM = $(REL)/rigpose-sim --methods stereo4,gc --runs $(OUTLIER_RUNS) --seed 1 --json
+
+BENCH_PARTS += $(BUILD)/bench/outliers.json
+$(BUILD)/bench/outliers.json: $(REL)/rigpose-sim host_tools/sim/outliers_bench.py FORCE
+	@mkdir -p $(BUILD)/bench
+	$(OUTLIER_SIM) > $(BUILD)/bench/outliers_clean.json
+	$(OUTLIER_SIM) --outliers 0.3 > $(BUILD)/bench/outliers_robust.json
+	$(OUTLIER_SIM) --outliers 0.3 --plain-update > $(BUILD)/bench/outliers_plain.json
+	$(PY) host_tools/sim/outliers_bench.py $(BUILD)/bench/outliers_clean.json \
+	    $(BUILD)/bench/outliers_robust.json $(BUILD)/bench/outliers_plain.json $@
