@@ -652,6 +652,30 @@ static void assert_info_equal(const rp_track_info_t *a, const rp_track_info_t *b
     }
 }
 
+/* Two trackers' outputs (n features each) and track positions equal bit for bit. */
+static void assert_tracks_equal(const rp_feat_t *fa, const rp_feat_t *fb, uint16_t n,
+                                const rp_tracker_t *a, const rp_tracker_t *b)
+{
+    for (int i = 0; i < n; ++i) {
+        assert_int_equal(fa[i].id, fb[i].id);
+        assert_true(fa[i].uv[0] == fb[i].uv[0] && fa[i].uv[1] == fb[i].uv[1]);
+    }
+    assert_int_equal(a->n, b->n);
+    assert_memory_equal(a->pos_q16, b->pos_q16, sizeof(a->pos_q16[0]) * a->n);
+}
+
+/* Step k of a sequence into img1: the texture moved by shift[k] (k < blank), a blank image
+ * (k == blank: every tracker skips it), shift[k - 1] after it. */
+static void render_step(const texture_t *t, const double (*shift)[2], unsigned k, unsigned blank)
+{
+    if (k == blank) {
+        memset(img1, 77, sizeof(img1));
+        return;
+    }
+    const unsigned j = k < blank ? k : k - 1;
+    render(t, shift[j][0], shift[j][1], img1);
+}
+
 /* Given a textured scene moving (sub-pixel shifts, up to 9 px a frame, a blank frame, a jump that
  * loses tracks at the border), then the library's tracker (vector kernels where the compiler has
  * them) and the plain-C build give bit-identical pyramids, features, positions and events. */
@@ -681,12 +705,7 @@ static void test_vector_equals_scalar(void **s)
     assert_ok(rp_track_init_scalar(&ts, &cfg));
     int total = 0;
     for (unsigned k = 0; k < sizeof(shift) / sizeof(shift[0]) + 1; ++k) {
-        if (k == 4) {
-            memset(img1, 77, sizeof(img1)); /* blank: skipped by both */
-        } else {
-            const unsigned j = k < 4 ? k : k - 1;
-            render(&t, shift[j][0], shift[j][1], img1);
-        }
+        render_step(&t, shift, k, 4);
         const rp_image_t im = view(img1, W, H);
         uint16_t nv = 0, ns = 0;
         rp_track_info_t iv, is;
@@ -697,11 +716,7 @@ static void test_vector_equals_scalar(void **s)
         assert_int_equal(sv, ss);
         assert_int_equal(nv, ns);
         assert_info_equal(&iv, &is, 1);
-        for (int i = 0; i < nv; ++i) {
-            assert_int_equal(fv[i].id, fs[i].id);
-            assert_true(fv[i].uv[0] == fs[i].uv[0] && fv[i].uv[1] == fs[i].uv[1]);
-        }
-        assert_memory_equal(tv.pos_q16, ts.pos_q16, sizeof(tv.pos_q16[0]) * tv.n);
+        assert_tracks_equal(fv, fs, nv, &tv, &ts);
         total += nv;
     }
     print_message("vector == scalar over %d features\n", total);
@@ -752,12 +767,7 @@ static void test_patch_cache_changes_nothing(void **s)
     assert_ok(rp_track_init(&tb, &cfg));
     int total = 0, cached = 0, poisoned = 0;
     for (unsigned k = 0; k < sizeof(shift) / sizeof(shift[0]) + 1; ++k) {
-        if (k == 5) {
-            memset(img1, 77, sizeof(img1)); /* blank: skipped by both */
-        } else {
-            const unsigned j = k < 5 ? k : k - 1;
-            render(&t, shift[j][0], shift[j][1], img1);
-        }
+        render_step(&t, shift, k, 5);
         const rp_image_t im = view(img1, W, H);
         const int64_t ut = (int64_t)k * 33000;
         memset(tb.slot_key, 0, sizeof(tb.slot_key));
@@ -783,11 +793,7 @@ static void test_patch_cache_changes_nothing(void **s)
         assert_int_equal(ib.n_cached, 0);
         cached += ia.n_cached;
         assert_info_equal(&ia, &ib, 0);
-        for (int i = 0; i < na; ++i) {
-            assert_int_equal(fa[i].id, fb[i].id);
-            assert_true(fa[i].uv[0] == fb[i].uv[0] && fa[i].uv[1] == fb[i].uv[1]);
-        }
-        assert_memory_equal(ta.pos_q16, tb.pos_q16, sizeof(ta.pos_q16[0]) * ta.n);
+        assert_tracks_equal(fa, fb, na, &ta, &tb);
         total += na;
     }
     print_message("patch cache: %d of %d tracks started from a cached patch (%u slots), "
