@@ -178,6 +178,7 @@ typedef struct {
     uint32_t pyr_gen[2];   /* generation of each pyramid's image (0: none) */
     uint32_t gen_next;     /* last generation given */
     uint16_t n_slots;      /* slots at cfg.win (rp_track_init) */
+    uint32_t slot_len;     /* int16 per slot: 3 x win x (win rounded up to 8) */
     rp_track_patch_key_t slot_key[RP_MAX_FEATS_PER_CAM];
     int16_t slot_pix[RP_TRACK_PATCH_CACHE_BYTES / 2 > 0 ? RP_TRACK_PATCH_CACHE_BYTES / 2 : 1];
 } rp_tracker_t;

@@ -198,8 +198,8 @@ rp_status_t rp_track_init(rp_tracker_t *trk, const rp_track_cfg_t *cfg)
     trk->pyr_gen[0] = trk->pyr_gen[1] = 0;
     trk->gen_next = 0;
     {
-        const uint32_t per = 3u * cfg->win * ((cfg->win + 7u) & ~7u); /* rows padded to 8 */
-        const uint32_t k = (uint32_t)(RP_TRACK_PATCH_CACHE_BYTES / 2) / per;
+        trk->slot_len = 3u * cfg->win * ((cfg->win + 7u) & ~7u); /* rows padded to 8 */
+        const uint32_t k = (uint32_t)(RP_TRACK_PATCH_CACHE_BYTES / 2) / trk->slot_len;
         trk->n_slots = (uint16_t)(k < RP_MAX_FEATS_PER_CAM ? k : RP_MAX_FEATS_PER_CAM);
         memset(trk->slot_key, 0, sizeof(trk->slot_key));
     }
@@ -1105,14 +1105,13 @@ rp_status_t rp_track_process(rp_tracker_t *trk, const rp_image_t *img, int64_t u
              * C's at f into slot fs.n, the index the track takes if it passes */
             lk_cache_t use = {NULL, NULL, trk->pyr_gen[trk->cur], 0, 0};
             lk_cache_t store = {NULL, NULL, trk->pyr_gen[nxt], 1, 0};
-            const uint32_t per = 3u * cfg->win * WPAD(cfg->win);
             if (i < trk->n_slots) {
                 use.key = &trk->slot_key[i];
-                use.pix = trk->slot_pix + (size_t)i * per;
+                use.pix = trk->slot_pix + (size_t)i * trk->slot_len;
             }
             if (fs.n < trk->n_slots) {
                 store.key = &trk->slot_key[fs.n];
-                store.pix = trk->slot_pix + (size_t)fs.n * per;
+                store.pix = trk->slot_pix + (size_t)fs.n * trk->slot_len;
             }
             lk_cache_t *pu = use.key != NULL ? &use : NULL;
             lk_cache_t *ps = store.key != NULL ? &store : NULL;
