@@ -61,7 +61,8 @@
     X(stereo.max_reproj_px, RP_CD_STEREO, R) X(stereo.default_dt_s, RP_CD_STEREO, R)             \
     X(stereo.max_pair_skew_s, RP_CD_STEREO, R)                                                    \
     X(stereo.refine_structure, RP_CD_STEREO, U) X(stereo.ransac, RP_CD_STEREO, U)                \
-    X(stereo.one_point, RP_CD_STEREO, U) X(stereo.quarantine, RP_CD_STEREO, U)                   \
+    X(stereo.one_point, RP_CD_STEREO, U) X(stereo.drop_odds, RP_CD_STEREO, R)                    \
+    X(stereo.retry_triangulation, RP_CD_STEREO, U)                                                \
     X(stereo.retire_outliers, RP_CD_STEREO, U) X(dormant_retired, RP_CD_STEREO, U)               \
     X(gc.n_cams, RP_CD_GC, U) X(gc.cams, RP_CD_GC, A) RP_CD_EKF_FIELDS(X, gc.ekf, RP_CD_GC)      \
     X(gc.min_tracked, RP_CD_GC, U) X(gc.init_depth_m, RP_CD_GC, R)                               \

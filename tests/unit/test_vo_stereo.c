@@ -474,23 +474,22 @@ static void test_ransac_runs_are_deterministic(void **state)
 }
 
 /* Feature-level simulation with 30 % gross outliers (uniform pixels, drawn anew every frame) in
- * every camera at every frame. The issue's target is 1.5x the clean figure in every component;
- * not reached. Measured (2 runs x 60 frames): with rig and 1-point RANSAC 2.2-4.3x (1.6-3.4x
- * with retire_outliers off: it retires sound tracks that read wrong once), also with
- * quarantine = 3
- * 1.5-1.9x (an outlier drawn anew every frame says nothing about its track, which a dropped
- * landmark wastes; real clips score worse with it, config/README.md, so it is not a default);
- * the rest of the gap: a landmark is only triangulated at a (re-)initialisation when its pixels
- * are inliers in both cameras of its pair (49 %), so the dirty run holds fewer landmarks. The
- * test pins 2.5x with quarantine = 3, and that the method before issue 14 (neither RANSAC) is
- * worse than that (it is 100x and more); the other figures are printed beside it. */
+ * every camera at every frame. The issue's target is 1.5x the clean figure in every component.
+ * An outlier drawn anew every frame says nothing about its track, so the layout must neither
+ * drop a landmark the first frame set its pixels read wrong nor give up a match whose pixels
+ * read wrong at the (re-)initialisation: the drop test and the retried matches
+ * (rp_vo_stereo.h). Over 50 runs of 100 frames (docs/results.md) the defaults come to
+ * 1.4-1.7x; this sample of 2 runs x 60 frames is too small for the target (0.9-2.7x by
+ * component), so the test pins that the defaults beat, in every component, the rule before
+ * them (a landmark left out in both cameras dropped at once, drop_odds just above 1; no retry),
+ * and that the method before issue 14 (neither RANSAC) is far worse; figures printed. */
 static void test_thirty_percent_gross_outliers_everywhere(void **state)
 {
     (void)state;
     const int runs = 2;
     const uint32_t frames = 60;
     static const char *const label[4] = {
-        "stereo4, 30 % outliers, both RANSACs", "  and quarantine 3", "  rig RANSAC only",
+        "stereo4, 30 % outliers, defaults", "  drop at once, no retry", "  rig RANSAC only",
         "  neither RANSAC (before)"};
     double clean[6] = {0}, dirty[4][6] = {{0}};
     for (int r = 0; r < runs; ++r) {
@@ -502,7 +501,10 @@ static void test_thirty_percent_gross_outliers_everywhere(void **state)
         for (int i = 0; i < 6; ++i) clean[i] += err[i] / runs;
         for (int m = 0; m < 4; ++m) {
             rp_vo_stereo_cfg_t cfg = def;
-            cfg.quarantine = m == 1 ? 3 : 0;
+            if (m == 1) {
+                cfg.drop_odds = RP_C(1.0001);
+                cfg.retry_triangulation = 0;
+            }
             cfg.one_point = m < 2;
             cfg.ransac = m < 3;
             set_outliers(0.3, 0, frames);
@@ -513,8 +515,8 @@ static void test_thirty_percent_gross_outliers_everywhere(void **state)
     }
     simfx_print_err("stereo4 clean", clean);
     for (int m = 0; m < 4; ++m) simfx_print_err(label[m], dirty[m]);
-    for (int i = 0; i < 6; ++i) assert_true(dirty[1][i] <= 2.5 * clean[i]);
-    for (int i = 0; i < 6; ++i) assert_true(dirty[3][i] > 2.5 * clean[i]); /* it can fail */
+    for (int i = 0; i < 6; ++i) assert_true(dirty[0][i] < dirty[1][i]);
+    for (int i = 0; i < 6; ++i) assert_true(dirty[3][i] > 2.5 * clean[i]);
 }
 
 /* A moving object carried alongside the rig in front of the front pair: 40 % of the points
@@ -572,9 +574,10 @@ static double worst_ratio(const double err[6], const double clean[6])
  * object's are dropped, re-initialises every frame (as a real camera's fewer tracks do): with
  * outlier tracks retired (rp_vo_stereo.h) the object's tracks, once rejected, stay out of the
  * map; without, every re-initialisation brings them back. Measured: retired 1.1-1.6x the clean
- * figures; not retired 5-34x in its worst component on the x86 builds, but 1.7x on the aarch64
- * float build, where the object happens to lose every consensus (without retiring the outcome
- * turns on which group each re-initialisation's update picks). The test pins retired within 2x
+ * figures; not retired 5-34x in its worst component on the x86 builds before the drop test
+ * (rp_vo_stereo.h; 1.6x since on x86-64 double), 1.7x on the aarch64 float build, where the
+ * object happens to lose every consensus (without retiring the outcome turns on which group each
+ * re-initialisation's update picks). The test pins retired within 2x
  * in every component with no frame lost and tracks actually retired (so that it can fail); the
  * not-retired figures are printed beside. */
 static void test_comoving_object_tracks_are_retired(void **state)

@@ -72,9 +72,15 @@ typedef struct {
                                      * (beyond the paper); 0: Lowe's method on everything */
     uint8_t one_point;              /* 1: every update through 1-point RANSAC (rp_ekf1pt.h);
                                      * 0: the plain gated update */
-    uint8_t quarantine;             /* a landmark left out of the update in every camera is
-                                     * dropped once this happens this many frames in a row
-                                     * (0 or 1: at once) */
+    rp_real drop_odds;              /* a landmark is dropped when the odds that its track
+                                     * went wrong, from the record of its observations left out
+                                     * of and taken into the updates against this frame set's
+                                     * share left out, exceed this (a sequential test, below);
+                                     * > 1 */
+    uint8_t retry_triangulation;    /* 1: a match of a (re-)initialisation that failed the
+                                     * epipolar or triangulation checks is tried again in the
+                                     * next frame sets while both cameras track it (below); 0:
+                                     * only at the next (re-)initialisation */
     uint8_t retire_outliers;        /* 1: the track of a landmark dropped as an outlier is not
                                      * triangulated again while it is tracked (below); 0: a
                                      * re-initialisation takes every matched track */
@@ -83,7 +89,8 @@ typedef struct {
 /* Defaults: rp_ekf_default_params with plant noise q_trans = 3 m^2/s^3, q_rot = 3 rad^2/s^3
  * (config/README.md says why); the paper's threshold of 50, 1.5 px epipolar band,
  * 0.05..100 m, 1.5 px, 1/30 s, structure refinement on, rig RANSAC on, 1-point RANSAC on (its
- * cost: config/README.md), no quarantine, outlier tracks retired.
+ * cost: config/README.md), landmarks dropped at odds of 100 to 1, failed matches retried,
+ * outlier tracks retired.
  * No pairs (n_pairs = 0): the caller
  * (or rp_pipe_default_cfg) names them. */
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
@@ -107,6 +114,33 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
  * track: its place in the image stays taken, so the detector does not put a new feature on the
  * same spot of the object (dropping them instead was measured worse: the object's freed area
  * filled with new tracks that the next re-initialisation took in). */
+/* Dropping a landmark (cfg.drop_odds). An update leaves out an observation either because its
+ * landmark's track went wrong (a moving object, a track slipped onto another surface: its
+ * observations then stay out, but for the chance RP_VO_DROP_PASS that one falls inside the
+ * consensus) or because a sound track's pixel read wrong once, at the rate eps at which this
+ * frame set's update left out the observations of landmarks that the previous update took in
+ * (Krichevsky-Trofimov estimate, at most 1/2: the consensus is a majority; from all
+ * observations while fewer than ekf.min_features have such a past). Page's CUSUM test of
+ * "wrong" against "sound" on each landmark's log-likelihood ratio,
+ *   S = max(0, S + sum over its observations in this frame set of
+ *                  log((1 - RP_VO_DROP_PASS) / eps) if left out,
+ *                  log(RP_VO_DROP_PASS / (1 - eps)) if taken in),
+ * drops it when S > log(cfg.drop_odds). On a clean frame set (eps a few %) a landmark left out
+ * in both cameras of its pair goes at once, as a moving object's do (its landmarks are left
+ * out from their first update on, so they do not raise eps); a landmark left out in one camera
+ * only goes after several frame sets of it; under pixel outliers drawn anew every frame (eps
+ * 30 %) it takes three frame sets in a row of both cameras left out, which a sound track meets
+ * rarely (eps^6). */
+#define RP_VO_DROP_PASS RP_C(0.1)
+
+/* Failed matches tried again (cfg.retry_triangulation). A (re-)initialisation triangulates
+ * every match of its pair; one whose two pixels fail its checks at that frame set (a pixel
+ * read wrong once, the other camera's track momentarily off) is not a landmark until the
+ * pair's next re-initialisation, which comes only when the pair runs short. Such a match is
+ * kept on a list (RP_MAX_FEATS_PER_CAM ids per pair, sorted) and tried again, with the same
+ * checks, at every later frame set's updated pose while both cameras track it; the list is
+ * replaced at the next (re-)initialisation. A match that is wrong stays wrong and keeps
+ * failing. */
 #define RP_VO_RETIRED_MAX (RP_MAX_PAIRS * RP_MAX_FEATS_PER_CAM)
 #define RP_VO_RETIRED_CELLS (2u * RP_VO_RETIRED_MAX)
 RP_STATIC_ASSERT(RP_VO_RETIRED_CELLS <= 65535, "retired tracks are counted in uint16_t");
@@ -129,8 +163,13 @@ typedef struct {
     rp_ekf1pt_t op;                     /* 1-point RANSAC's generator and scratch */
     uint8_t inl[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: RANSAC's inliers */
     uint8_t keep[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];/* scratch: obs[i]'s landmark is kept */
-    uint8_t strikes[RP_IDMAP_MAX_SLOTS]; /* per landmark slot: frames in a row left out */
-    uint8_t seen[RP_IDMAP_MAX_SLOTS];    /* scratch of quarantine() */
+    rp_real drop_s[RP_IDMAP_MAX_SLOTS];  /* per landmark slot: the drop test's S (above) */
+    rp_real drop_sum[RP_IDMAP_MAX_SLOTS];/* scratch of the drop test */
+    uint8_t was_in[RP_IDMAP_MAX_SLOTS];  /* per landmark slot: the last update took it in */
+    uint8_t seen[RP_IDMAP_MAX_SLOTS];    /* scratch of the drop test */
+    uint32_t retry_id[RP_MAX_PAIRS][RP_MAX_FEATS_PER_CAM]; /* failed matches (above), sorted */
+    uint16_t n_retry[RP_MAX_PAIRS];
+    uint32_t retry_scratch[RP_MAX_FEATS_PER_CAM]; /* scratch of the triangulation */
     uint32_t retired_id[RP_VO_RETIRED_MAX]; /* retired tracks (above) */
     uint8_t retired_pair[RP_VO_RETIRED_MAX]; /*   and the pair each belongs to */
     uint16_t n_retired;

@@ -28,7 +28,8 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.refine_structure = 1;
     c.ransac = 1;
     c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
-    c.quarantine = 0; /* config/README.md: 3 helps i.i.d. outliers, costs on real clips */
+    c.drop_odds = RP_C(100.0); /* rp_vo_stereo.h, "Dropping a landmark" */
+    c.retry_triangulation = 1;
     c.retire_outliers = 1; /* rp_vo_stereo.h: a track that lied once is not believed again */
     return c;
 }
@@ -57,7 +58,8 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
         !(cfg->max_depth_m > cfg->min_depth_m) || !(cfg->max_reproj_px > RP_C(0.0)) ||
         !(cfg->max_pair_skew_s >= RP_C(0.0)) || !rp_finite(cfg->max_pair_skew_s) ||
         !(cfg->default_dt_s > RP_C(0.0)) || cfg->ransac > 1 || cfg->one_point > 1 ||
-        cfg->retire_outliers > 1) {
+        !(cfg->drop_odds > RP_C(1.0)) || !rp_finite(cfg->drop_odds) ||
+        cfg->retry_triangulation > 1 || cfg->retire_outliers > 1) {
         return RP_E_ARG;
     }
     uint8_t in_use[RP_MAX_CAMS] = {0};
@@ -276,12 +278,29 @@ static void retire_dropped(rp_vo_stereo_t *vo, uint32_t n)
     }
 }
 
+/* 1 if id is on pair k's list of failed matches (sorted: rp_vo_stereo.h). */
+static int retry_listed(const rp_vo_stereo_t *vo, uint8_t k, uint32_t id)
+{
+    uint16_t lo = 0, hi = vo->n_retry[k];
+    while (lo < hi) {
+        const uint16_t mid = (uint16_t)((lo + hi) / 2u);
+        if (vo->retry_id[k][mid] < id) {
+            lo = (uint16_t)(mid + 1u);
+        } else {
+            hi = mid;
+        }
+    }
+    return lo < vo->n_retry[k] && vo->retry_id[k][lo] == id;
+}
+
 /* Triangulate the matches of pair k in frame set fs at pose p and add them as landmarks.
  * If `only_in` is given, a match is used only when its id is also in that frame set (a
- * backtracked re-initialisation only wants features still tracked now). Returns how many
- * were added. */
+ * backtracked re-initialisation only wants features still tracked now). retry 0: every match,
+ * and the ones that fail the checks become the pair's list of failed matches; 1: only the
+ * listed ones, and those that fail again (and are still matched) stay listed
+ * (cfg.retry_triangulation). Returns how many were added. */
 static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_frameset_t *fs,
-                                 const rp_real p[6], const rp_frameset_t *only_in)
+                                 const rp_real p[6], const rp_frameset_t *only_in, int retry)
 {
     const rp_stereo_pair_t *sp = &vo->pair[k];
     const rp_vo_stereo_cfg_t *cfg = &vo->cfg;
@@ -300,7 +319,8 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
     if (rp_pose_lin_at(&pl, p, vo->ekf.x + 6, da) != RP_OK) {
         return 0;
     }
-    uint16_t added = 0;
+    uint16_t added = 0, n_failed = 0;
+    uint32_t *failed = vo->retry_scratch; /* the new list; in place of the old when done */
     match_map_build(vo, fs, sp->b);
     for (uint16_t f = 0; f < fs->n[sp->a]; ++f) {
         const rp_feat_t *fa = &fs->f[sp->a][f];
@@ -311,9 +331,11 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
         }
         const rp_feat_t *fb = &fs->f[sp->b][jb];
         if (!rp_all_finite(fa->uv, 2) || !rp_all_finite(fb->uv, 2) ||
-            (only_in && !tracked_in(only_in, sp, fa->id))) {
+            (only_in && !tracked_in(only_in, sp, fa->id)) ||
+            (retry && !retry_listed(vo, k, fa->id))) {
             continue;
         }
+        failed[n_failed++] = fa->id; /* taken back below if it becomes a landmark */
         rp_real epi, Pa[3], reproj, M[3];
         if (rp_stereo_epipolar_px(vo->rig, sp, fa->uv, fb->uv, &epi) != RP_OK ||
             epi > cfg->max_epipolar_px) {
@@ -333,10 +355,23 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
         if (rp_lmtab_insert(&vo->lm, fa->id, k, &pt, &slot) != RP_OK) {
             break; /* table full: keep what we have */
         }
-        vo->strikes[slot] = 0;
+        n_failed--;
+        vo->drop_s[slot] = RP_C(0.0);
+        vo->was_in[slot] = 0;
         vo->seen[slot] = 0;
         added++;
     }
+    /* the list sorted (insertion: at most RP_MAX_FEATS_PER_CAM ids, mostly in order) */
+    for (uint16_t i = 1; i < n_failed; ++i) {
+        const uint32_t id = failed[i];
+        uint16_t j = i;
+        for (; j > 0 && failed[j - 1] > id; --j) {
+            failed[j] = failed[j - 1];
+        }
+        failed[j] = id;
+    }
+    memcpy(vo->retry_id[k], failed, n_failed * sizeof(failed[0]));
+    vo->n_retry[k] = vo->cfg.retry_triangulation ? n_failed : 0u;
     return added;
 }
 
@@ -372,15 +407,38 @@ static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uin
 
 /* ---- the step ---------------------------------------------------------------------------- */
 
-/* vo->keep[i] = 1 for an observation whose landmark is kept: used now in some camera (its
- * strikes cleared), or left out of this frame's update in every camera for fewer than
- * cfg.quarantine frames in a row (its strikes counted). */
-static void quarantine(rp_vo_stereo_t *vo, uint32_t n)
+/* vo->keep[i] = 1 for an observation whose landmark is kept: the drop test of rp_vo_stereo.h
+ * ("Dropping a landmark") on this frame set's n observations (vo->used: taken into the update)
+ * has not fired for it. */
+static void drop_test(rp_vo_stereo_t *vo, uint32_t n)
 {
     uint16_t slot;
-    for (uint32_t i = 0; i < n; ++i) { /* seen[slot]: 1 not used so far, 2 used */
-        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK) {
-            vo->seen[slot] = (uint8_t)(vo->used[i] ? 2 : vo->seen[slot] > 1 ? 2 : 1);
+    uint32_t n_was = 0, n_was_out = 0, n_out = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        n_out += !vo->used[i];
+        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK && vo->was_in[slot]) {
+            n_was++;
+            n_was_out += !vo->used[i];
+        }
+    }
+    /* eps: the share left out of the observations whose landmark the previous update took in
+     * (Krichevsky-Trofimov: never 0); all observations while fewer than the filter's minimum
+     * have a past */
+    const int past = n_was >= vo->cfg.ekf.min_features;
+    rp_real eps = ((rp_real)(past ? n_was_out : n_out) + RP_C(0.5)) /
+                  ((rp_real)(past ? n_was : n) + RP_C(1.0));
+    eps = eps < RP_C(0.5) ? eps : RP_C(0.5);
+    const rp_real l_out = rp_log((RP_C(1.0) - RP_VO_DROP_PASS) / eps);
+    const rp_real l_in = rp_log(RP_VO_DROP_PASS / (RP_C(1.0) - eps));
+    const rp_real h = rp_log(vo->cfg.drop_odds);
+    for (uint32_t i = 0; i < n; ++i) { /* this frame set's sum per landmark; seen: 1 started, */
+        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK) { /* 2 and taken in */
+            if (!vo->seen[slot]) {
+                vo->drop_sum[slot] = vo->drop_s[slot];
+                vo->seen[slot] = 1;
+            }
+            vo->drop_sum[slot] += vo->used[i] ? l_in : l_out;
+            vo->seen[slot] = (uint8_t)(vo->used[i] ? 2 : vo->seen[slot]);
         }
     }
     for (uint32_t i = 0; i < n; ++i) {
@@ -388,13 +446,12 @@ static void quarantine(rp_vo_stereo_t *vo, uint32_t n)
         if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) != RP_OK) {
             continue;
         }
-        if (vo->seen[slot] == 2) {
-            vo->strikes[slot] = 0;
-        } else if (vo->seen[slot] == 1) {
-            vo->strikes[slot] = (uint8_t)(vo->strikes[slot] < 255 ? vo->strikes[slot] + 1 : 255);
+        if (vo->seen[slot]) { /* its first observation: the new S */
+            vo->drop_s[slot] = vo->drop_sum[slot] > RP_C(0.0) ? vo->drop_sum[slot] : RP_C(0.0);
+            vo->was_in[slot] = (uint8_t)(vo->seen[slot] == 2);
+            vo->seen[slot] = 0;
         }
-        vo->seen[slot] = 0; /* counted once; later observations of it read strikes */
-        vo->keep[i] = (uint8_t)(vo->used[i] || vo->strikes[slot] < vo->cfg.quarantine);
+        vo->keep[i] = (uint8_t)(vo->drop_s[slot] <= h);
     }
 }
 
@@ -416,7 +473,7 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
     (void)rp_lmtab_clear(&vo->lm);
     uint16_t added = 0;
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-        added = (uint16_t)(added + triangulate_pair(vo, k, fs, zero, NULL));
+        added = (uint16_t)(added + triangulate_pair(vo, k, fs, zero, NULL, 0));
     }
     (void)rp_lmtab_drop_unmarked(&vo->lm, 0, NULL); /* clears the marks */
     /* ignored: cannot fail: the parameters were checked at init */
@@ -736,7 +793,7 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
         if (vo->lm.map.n_group[k] < vo->cfg.min_tracked && (imaged & (1u << k))) {
             /* ignored: the count is not needed here */
-            (void)triangulate_pair(vo, k, &vo->prev, vo->prev_p, fs);
+            (void)triangulate_pair(vo, k, &vo->prev, vo->prev_p, fs, 0);
             reinit = 1;
         }
     }
@@ -775,14 +832,14 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
     }
     if (st == RP_OK) {
         flags |= RP_EST_TRACKING;
-        /* A landmark whose every observation was gated is an outlier track: drop it (with
-         * cfg.quarantine > 0: once it has been so that many frames in a row). */
+        /* A landmark whose observations the updates leave out is an outlier track: drop it
+         * (the drop test, rp_vo_stereo.h). */
         for (uint32_t i = 0; i < n; ++i) {
             if (vo->used[i]) {
                 est->n_used[vo->obs[i].cam]++;
             }
         }
-        quarantine(vo, n);
+        drop_test(vo, n);
         /* ignored: only NULL arguments fail */
         (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->keep, n);
         if (vo->cfg.refine_structure) {
@@ -799,6 +856,13 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         (void)rp_lmtab_drop_unmarked(&vo->lm, n_gated > 0 ? imaged : 0u, NULL);
         if (n_gated > 0) {
             retire_dropped(vo, n);
+        }
+        /* the failed matches of the last (re-)initialisations, at the updated pose */
+        for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
+            if (vo->n_retry[k] > 0 && (imaged & (1u << k))) {
+                /* ignored: the count is not needed here */
+                (void)triangulate_pair(vo, k, fs, vo->ekf.x, NULL, 1);
+            }
         }
     } else {
         flags |= RP_EST_LOST;
