@@ -479,7 +479,7 @@ static void test_ransac_runs_are_deterministic(void **state)
  * drop a landmark the first frame set its pixels read wrong nor give up a match whose pixels
  * read wrong at the (re-)initialisation: the drop test and the retried matches
  * (rp_vo_stereo.h). Over 50 runs of 100 frames (docs/results.md) the defaults come to
- * 1.4-1.7x; this sample of 2 runs x 60 frames is too small for the target (0.9-2.7x by
+ * 1.3-1.5x; this sample of 2 runs x 60 frames is too small for the target (0.8-2.4x by
  * component), so the test pins that the defaults beat, in every component, the rule before
  * them (a landmark left out in both cameras dropped at once, drop_odds just above 1; no retry),
  * and that the method before issue 14 (neither RANSAC) is far worse; figures printed. */

@@ -137,13 +137,23 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
  * every match of its pair; one whose two pixels fail its checks at that frame set (a pixel
  * read wrong once, the other camera's track momentarily off) is not a landmark until the
  * pair's next re-initialisation, which comes only when the pair runs short. Such a match is
- * kept on a list (RP_MAX_FEATS_PER_CAM ids per pair, sorted) and tried again, with the same
- * checks, at every later frame set's updated pose while both cameras track it; the list is
- * replaced at the next (re-)initialisation. A match that is wrong stays wrong and keeps
- * failing. */
+ * kept on a list (RP_MAX_FEATS_PER_CAM per pair, sorted by id, with the two pixels that failed
+ * it and the pose they were seen at) and tried again, with the same checks, at every later
+ * frame set's updated pose while both cameras track it; the list is replaced at the next
+ * (re-)initialisation. A match that is wrong stays wrong and keeps failing. One that succeeds
+ * is placed at the later pose, whose error it carries, and then takes its first two pixels
+ * through its structure EKF at their pose (the gate refuses the wrong one): the right one's ray
+ * ties it to the pose the map was anchored at. */
 #define RP_VO_RETIRED_MAX (RP_MAX_PAIRS * RP_MAX_FEATS_PER_CAM)
 #define RP_VO_RETIRED_CELLS (2u * RP_VO_RETIRED_MAX)
 RP_STATIC_ASSERT(RP_VO_RETIRED_CELLS <= 65535, "retired tracks are counted in uint16_t");
+
+/* A failed match (cfg.retry_triangulation): its id and its two pixels (camera a, b) in the
+ * frame set that failed it. */
+typedef struct {
+    uint32_t id;
+    rp_real uv[2][2];
+} rp_vo_retry_t;
 
 typedef struct {
     const rp_rig_t *rig;
@@ -167,9 +177,10 @@ typedef struct {
     rp_real drop_sum[RP_IDMAP_MAX_SLOTS];/* scratch of the drop test */
     uint8_t was_in[RP_IDMAP_MAX_SLOTS];  /* per landmark slot: the last update took it in */
     uint8_t seen[RP_IDMAP_MAX_SLOTS];    /* scratch of the drop test */
-    uint32_t retry_id[RP_MAX_PAIRS][RP_MAX_FEATS_PER_CAM]; /* failed matches (above), sorted */
+    rp_vo_retry_t retry[RP_MAX_PAIRS][RP_MAX_FEATS_PER_CAM]; /* failed matches (above), by id */
     uint16_t n_retry[RP_MAX_PAIRS];
-    uint32_t retry_scratch[RP_MAX_FEATS_PER_CAM]; /* scratch of the triangulation */
+    rp_pose_lin_t retry_pl[RP_MAX_PAIRS]; /* the pose of their pixels (camera a's time) */
+    rp_vo_retry_t retry_scratch[RP_MAX_FEATS_PER_CAM]; /* scratch of the triangulation */
     uint32_t retired_id[RP_VO_RETIRED_MAX]; /* retired tracks (above) */
     uint8_t retired_pair[RP_VO_RETIRED_MAX]; /*   and the pair each belongs to */
     uint16_t n_retired;

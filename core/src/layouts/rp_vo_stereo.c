@@ -278,27 +278,29 @@ static void retire_dropped(rp_vo_stereo_t *vo, uint32_t n)
     }
 }
 
-/* 1 if id is on pair k's list of failed matches (sorted: rp_vo_stereo.h). */
-static int retry_listed(const rp_vo_stereo_t *vo, uint8_t k, uint32_t id)
+/* The entry of id on pair k's list of failed matches (sorted by id: rp_vo_stereo.h), or
+ * NULL. */
+static const rp_vo_retry_t *retry_listed(const rp_vo_stereo_t *vo, uint8_t k, uint32_t id)
 {
     uint16_t lo = 0, hi = vo->n_retry[k];
     while (lo < hi) {
         const uint16_t mid = (uint16_t)((lo + hi) / 2u);
-        if (vo->retry_id[k][mid] < id) {
+        if (vo->retry[k][mid].id < id) {
             lo = (uint16_t)(mid + 1u);
         } else {
             hi = mid;
         }
     }
-    return lo < vo->n_retry[k] && vo->retry_id[k][lo] == id;
+    return lo < vo->n_retry[k] && vo->retry[k][lo].id == id ? &vo->retry[k][lo] : NULL;
 }
 
 /* Triangulate the matches of pair k in frame set fs at pose p and add them as landmarks.
  * If `only_in` is given, a match is used only when its id is also in that frame set (a
  * backtracked re-initialisation only wants features still tracked now). retry 0: every match,
- * and the ones that fail the checks become the pair's list of failed matches; 1: only the
- * listed ones, and those that fail again (and are still matched) stay listed
- * (cfg.retry_triangulation). Returns how many were added. */
+ * and the ones that fail the checks become the pair's list of failed matches, with their
+ * pixels and pose p; 1: only the listed ones, each that succeeds also updated with its listed
+ * pixels, and those that fail again (and are still matched) stay listed (cfg.retry_triangulation).
+ * Returns how many were added. */
 static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_frameset_t *fs,
                                  const rp_real p[6], const rp_frameset_t *only_in, int retry)
 {
@@ -320,7 +322,7 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
         return 0;
     }
     uint16_t added = 0, n_failed = 0;
-    uint32_t *failed = vo->retry_scratch; /* the new list; in place of the old when done */
+    rp_vo_retry_t *failed = vo->retry_scratch; /* the new list; in place of the old when done */
     match_map_build(vo, fs, sp->b);
     for (uint16_t f = 0; f < fs->n[sp->a]; ++f) {
         const rp_feat_t *fa = &fs->f[sp->a][f];
@@ -330,12 +332,21 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
             continue;
         }
         const rp_feat_t *fb = &fs->f[sp->b][jb];
+        const rp_vo_retry_t *was = retry ? retry_listed(vo, k, fa->id) : NULL;
         if (!rp_all_finite(fa->uv, 2) || !rp_all_finite(fb->uv, 2) ||
-            (only_in && !tracked_in(only_in, sp, fa->id)) ||
-            (retry && !retry_listed(vo, k, fa->id))) {
+            (only_in && !tracked_in(only_in, sp, fa->id)) || (retry && !was)) {
             continue;
         }
-        failed[n_failed++] = fa->id; /* taken back below if it becomes a landmark */
+        /* listed, with the pixels that failed it first; taken back below if it becomes a
+         * landmark */
+        if (was) {
+            failed[n_failed] = *was;
+        } else {
+            failed[n_failed].id = fa->id;
+            memcpy(failed[n_failed].uv[0], fa->uv, sizeof(fa->uv));
+            memcpy(failed[n_failed].uv[1], fb->uv, sizeof(fb->uv));
+        }
+        n_failed++;
         rp_real epi, Pa[3], reproj, M[3];
         if (rp_stereo_epipolar_px(vo->rig, sp, fa->uv, fb->uv, &epi) != RP_OK ||
             epi > cfg->max_epipolar_px) {
@@ -351,6 +362,13 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
             rp_struct_init(&pt, vo->rig, cams, 2, &pl, M, cfg->ekf.sigma_px) != RP_OK) {
             continue;
         }
+        if (was) { /* the pixels that failed it first, at their pose (rp_vo_stereo.h) */
+            for (int c = 0; c < 2; ++c) {
+                /* ignored: the gate refuses the wrong pixel of the two (not a fault) */
+                (void)rp_struct_update(&pt, vo->rig, cams[c], &vo->retry_pl[k], was->uv[c],
+                                       cfg->ekf.sigma_px, cfg->ekf.gate_chi2);
+            }
+        }
         uint16_t slot;
         if (rp_lmtab_insert(&vo->lm, fa->id, k, &pt, &slot) != RP_OK) {
             break; /* table full: keep what we have */
@@ -363,15 +381,18 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
     }
     /* the list sorted (insertion: at most RP_MAX_FEATS_PER_CAM ids, mostly in order) */
     for (uint16_t i = 1; i < n_failed; ++i) {
-        const uint32_t id = failed[i];
+        const rp_vo_retry_t e = failed[i];
         uint16_t j = i;
-        for (; j > 0 && failed[j - 1] > id; --j) {
+        for (; j > 0 && failed[j - 1].id > e.id; --j) {
             failed[j] = failed[j - 1];
         }
-        failed[j] = id;
+        failed[j] = e;
     }
-    memcpy(vo->retry_id[k], failed, n_failed * sizeof(failed[0]));
+    memcpy(vo->retry[k], failed, n_failed * sizeof(failed[0]));
     vo->n_retry[k] = vo->cfg.retry_triangulation ? n_failed : 0u;
+    if (!retry) {
+        vo->retry_pl[k] = pl; /* the pose of the listed pixels */
+    }
     return added;
 }
 
