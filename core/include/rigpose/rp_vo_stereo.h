@@ -173,6 +173,8 @@ typedef struct {
     rp_ekf1pt_t op;                     /* 1-point RANSAC's generator and scratch */
     uint8_t inl[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: RANSAC's inliers */
     uint8_t keep[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];/* scratch: obs[i]'s landmark is kept */
+    uint16_t obs_slot[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: obs[i]'s landmark slot
+                                                            * (RP_IDMAP_MAX_SLOTS: none) */
     rp_real drop_s[RP_IDMAP_MAX_SLOTS];  /* per landmark slot: the drop test's S (above) */
     rp_real drop_sum[RP_IDMAP_MAX_SLOTS];/* scratch of the drop test */
     uint8_t was_in[RP_IDMAP_MAX_SLOTS];  /* per landmark slot: the last update took it in */

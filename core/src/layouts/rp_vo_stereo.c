@@ -297,10 +297,10 @@ static const rp_vo_retry_t *retry_listed(const rp_vo_stereo_t *vo, uint8_t k, ui
 /* Triangulate the matches of pair k in frame set fs at pose p and add them as landmarks.
  * If `only_in` is given, a match is used only when its id is also in that frame set (a
  * backtracked re-initialisation only wants features still tracked now). retry 0: every match,
- * and the ones that fail the checks become the pair's list of failed matches, with their
- * pixels and pose p; 1: only the listed ones, each that succeeds also updated with its listed
- * pixels, and those that fail again (and are still matched) stay listed (cfg.retry_triangulation).
- * Returns how many were added. */
+ * and (cfg.retry_triangulation) the ones that fail the checks become the pair's list of failed
+ * matches, with their pixels and pose p; 1: only the listed ones, each that succeeds also
+ * updated with its listed pixels, and those that fail again (and are still matched) stay
+ * listed. Returns how many were added. */
 static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_frameset_t *fs,
                                  const rp_real p[6], const rp_frameset_t *only_in, int retry)
 {
@@ -379,6 +379,9 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
         vo->seen[slot] = 0;
         added++;
     }
+    if (!cfg->retry_triangulation) {
+        return added;
+    }
     /* the list sorted (insertion: at most RP_MAX_FEATS_PER_CAM ids, mostly in order) */
     for (uint16_t i = 1; i < n_failed; ++i) {
         const rp_vo_retry_t e = failed[i];
@@ -389,7 +392,7 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
         failed[j] = e;
     }
     memcpy(vo->retry[k], failed, n_failed * sizeof(failed[0]));
-    vo->n_retry[k] = vo->cfg.retry_triangulation ? n_failed : 0u;
+    vo->n_retry[k] = n_failed;
     if (!retry) {
         vo->retry_pl[k] = pl; /* the pose of the listed pixels */
     }
@@ -433,11 +436,14 @@ static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uin
  * has not fired for it. */
 static void drop_test(rp_vo_stereo_t *vo, uint32_t n)
 {
-    uint16_t slot;
     uint32_t n_was = 0, n_was_out = 0, n_out = 0;
     for (uint32_t i = 0; i < n; ++i) {
+        uint16_t slot;
+        vo->obs_slot[i] = rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK
+                              ? slot
+                              : (uint16_t)RP_IDMAP_MAX_SLOTS;
         n_out += !vo->used[i];
-        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK && vo->was_in[slot]) {
+        if (vo->obs_slot[i] < RP_IDMAP_MAX_SLOTS && vo->was_in[slot]) {
             n_was++;
             n_was_out += !vo->used[i];
         }
@@ -453,7 +459,8 @@ static void drop_test(rp_vo_stereo_t *vo, uint32_t n)
     const rp_real l_in = rp_log(RP_VO_DROP_PASS / (RP_C(1.0) - eps));
     const rp_real h = rp_log(vo->cfg.drop_odds);
     for (uint32_t i = 0; i < n; ++i) { /* this frame set's sum per landmark; seen: 1 started, */
-        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK) { /* 2 and taken in */
+        const uint16_t slot = vo->obs_slot[i]; /* 2 and taken in */
+        if (slot < RP_IDMAP_MAX_SLOTS) {
             if (!vo->seen[slot]) {
                 vo->drop_sum[slot] = vo->drop_s[slot];
                 vo->seen[slot] = 1;
@@ -464,7 +471,8 @@ static void drop_test(rp_vo_stereo_t *vo, uint32_t n)
     }
     for (uint32_t i = 0; i < n; ++i) {
         vo->keep[i] = vo->used[i];
-        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) != RP_OK) {
+        const uint16_t slot = vo->obs_slot[i];
+        if (slot >= RP_IDMAP_MAX_SLOTS) {
             continue;
         }
         if (vo->seen[slot]) { /* its first observation: the new S */
