@@ -10,7 +10,19 @@
  *  1. Hypotheses: draw one usable observation i (w > 0, projectable at p0) uniformly; its
  *     partial EKF update (state only, one linearisation at p0)
  *         S_i = J_i C J_i^T + s2 / w_i I,   p_i = p0 + C J_i^T S_i^-1 (z_i - h_i(p0))
- *     is the hypothesis. Its support: every usable observation k with
+ *     is the hypothesis. On a rig, one observation of each of up to hyp_cams cameras instead
+ *     (i, then draws among the usable ones until a camera not yet in it comes up, at most
+ *     RP_EKF1PT_HYP_TRIES draws), the prior updated by them (rp_ekf_update, two
+ *     linearisations): the hypothesis. Why: the prior is what lets one observation fix a
+ *     pose, and it is wide exactly when outliers do most harm (the start, a turn's onset,
+ *     gc's young landmarks whose depths are still the assumed one): a single camera then
+ *     leaves rotation about axes across it and translation along them interchangeable, and
+ *     a hypothesis drawn in one camera is supported by that camera's features and by whatever
+ *     else fits the same ambiguous pose (a moving object static in another camera's image:
+ *     gc from rendered pixels took the object and cam2 over the static scene in its first
+ *     frames). Observations of three cameras fix all six directions whatever the prior; on a
+ *     camera alone (cam1..cam4) it is the single observation above. Its support: every usable
+ *     observation k with
  *         w_k |z_k - h_k(p_i)|^2 <= gate_chi2 s2
  *     (the filter's own chi-square gate on the pixel noise alone: at p_i the pose error is
  *     small next to it for the inliers). A hypothesis that beats the best so far is refined
@@ -20,8 +32,9 @@
  *     small part of the inliers, and the adaptive count below would draw for a far worse
  *     inlier ratio than the data's.) The largest support wins (ties: the first); after each
  *     better one the draw count is adapted,
- *         n_hyp = log(1 - confidence) / log(1 - eps),   eps = support / usable,
- *     clamped to [min_hyp, max_hyp] (paper, eq. 17 with m = 1).
+ *         n_hyp = log(1 - confidence) / log(1 - eps^m),   eps = support / usable,
+ *     m the observations of a hypothesis (hyp_cams, or the cameras the usable observations
+ *     come from if fewer), clamped to [min_hyp, max_hyp] (paper, eq. 17).
  *  2. Rescue of the high-innovation inliers: every other usable observation whose innovation
  *     at the winner's refined posterior passes the filter's gate,
  *     r^T (J C+ J^T + s2 / w I)^-1 r <= gate_chi2, C+ that posterior's pose covariance, joins
@@ -82,6 +95,10 @@ extern "C" {
 #endif
 
 #define RP_EKF1PT_MAX_OBS (RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM)
+/* Draws at most to find a hypothesis's observation of another camera (step 1). */
+#define RP_EKF1PT_HYP_TRIES 16
+
+RP_STATIC_ASSERT(RP_EKF1PT_MAX_OBS <= 65535, "RP_EKF1PT_MAX_OBS: indices are uint16_t");
 
 typedef struct {
     rp_real confidence; /* probability of drawing at least one inlier hypothesis (0.99) */
@@ -92,12 +109,15 @@ typedef struct {
     uint8_t regroup;    /* 1: step 2b, the rescued ones redrawn as a consensus of their own
                          * when they do not fit together (1; off for layouts whose map errors
                          * the pose update does not model: rp_vo_gc.c, rp_vo_mono.c) */
+    uint8_t hyp_cams;   /* cameras a hypothesis draws one observation from, 1..RP_MAX_CAMS
+                         * (3: all six pose directions; 1: the paper's one observation) */
 } rp_ekf1pt_params_t;
 
 /* Every default, the only place they are written. */
 rp_ekf1pt_params_t rp_ekf1pt_default_params(void);
 
-/* Caller-owned state (with the default limits 184 KB in double; make it static). */
+/* Caller-owned state (with the default limits 222 KB in double, 122 KB in float; make it
+ * static). */
 typedef struct {
     uint64_t rng;                        /* xorshift64* state, never 0 */
     uint8_t best[RP_EKF1PT_MAX_OBS];     /* the winner's support */
@@ -110,6 +130,8 @@ typedef struct {
     rp_ekf_t prior;                      /* the filter as it was given */
     rp_ekf_t post;                       /* the best support's refined posterior */
     rp_ekf_t base;                       /* the low-innovation posterior, for step 2b */
+    rp_ekf_t hyp;                        /* a hypothesis of several cameras' observations */
+    uint16_t pool[RP_EKF1PT_MAX_OBS];    /* the usable observations' indices (step 1) */
 } rp_ekf1pt_t;
 
 typedef struct {

@@ -20,11 +20,14 @@
  *     the ray under mature_frac of its range); until then it only feeds its structure EKF.
  *     While fewer than min_mature landmarks are converged (start-up), every landmark enters,
  *     weighted as above.
- *     With `one_point` the update is 1-point RANSAC (rp_ekf1pt.h): hypotheses from single
- *     observations through the prior, the consensus and its rescued inliers update the filter,
- *     the others are left out (counted as gated). This is also gc's robust start: at frame 1
- *     the landmarks' depths are still the assumed one (no metric structure for a minimal
- *     solver), but the filter's prior at the origin is what 1-point RANSAC needs.
+ *     With `one_point` the update is 1-point RANSAC (rp_ekf1pt.h): hypotheses from one
+ *     observation of each of three cameras through the prior, the consensus and its rescued
+ *     inliers update the filter, the others are left out (counted as gated). This is also gc's
+ *     robust start: at frame 1 the landmarks' depths are still the assumed one (no metric
+ *     structure for a minimal solver), but the filter's prior at the origin and three cameras'
+ *     observations fix a hypothesis (one camera's alone leaves rotation across it and
+ *     translation along it interchangeable, and a group that fits that ambiguity, such as an
+ *     object static in another camera's image, could win).
  *     With `ransac`, once min_mature landmarks have converged (metric structure), an update
  *     that leaves most of the offered observations out (or fails with enough of them) says
  *     the prediction is wrong: the pose is re-found from the images by rig RANSAC over every

@@ -25,6 +25,7 @@ rp_ekf1pt_params_t rp_ekf1pt_default_params(void)
     p.max_hyp = 200;
     p.plain_without_majority = 0;
     p.regroup = 1;
+    p.hyp_cams = 3;
     return p;
 }
 
@@ -145,8 +146,9 @@ static uint32_t support(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_ekf_t *e,
     return c;
 }
 
-/* Draws needed for confidence when a fraction eps of the observations are inliers. */
-static uint32_t draws_needed(const rp_ekf1pt_params_t *prm, rp_real eps)
+/* Draws needed for confidence when a fraction eps of the observations are inliers and a
+ * hypothesis takes m of them. */
+static uint32_t draws_needed(const rp_ekf1pt_params_t *prm, rp_real eps, uint32_t m)
 {
     if (!(eps > RP_C(0.0))) {
         return prm->max_hyp;
@@ -154,7 +156,12 @@ static uint32_t draws_needed(const rp_ekf1pt_params_t *prm, rp_real eps)
     if (!(eps < RP_C(1.0))) {
         return prm->min_hyp;
     }
-    const rp_real nf = rp_log(RP_C(1.0) - prm->confidence) / rp_log(RP_C(1.0) - eps) + RP_C(1.0);
+    rp_real all_in = eps; /* eps^m: every observation of a hypothesis an inlier */
+    for (uint32_t k = 1; k < m; ++k) {
+        all_in *= eps;
+    }
+    const rp_real nf =
+        rp_log(RP_C(1.0) - prm->confidence) / rp_log(RP_C(1.0) - all_in) + RP_C(1.0);
     if (!(nf < (rp_real)prm->max_hyp)) {
         return prm->max_hyp;
     }
@@ -203,43 +210,81 @@ static uint32_t local_opt(rp_ekf1pt_t *s, const rp_ekf_t *base, const rp_rig_t *
  * its local optimisation. On return s->best is the largest support, s->post its refined
  * posterior (base if none was refined), *n_hyp the hypotheses drawn; returns the support's
  * size. */
+/* Hypothesis from the single observation i: base's pose updated by it (one linearisation at
+ * base's pose p0, pose covariance C) into p. 0 if it cannot be formed. */
+static int hyp_one(const rp_ekf_t *base, const rp_rig_t *rig, const rp_obs_t *o,
+                   const rp_real C[36], rp_real s2, campose_t *cp0, rp_real p[NP])
+{
+    rp_real uv[2], J[12], S[4], Si[4], CJt[12];
+    if (!obs_pose(base, base->x, o, cp0) ||
+        rp_rig_project(rig, o->cam, &cp0->pl, o->M, uv, J, NULL) != RP_OK) {
+        return 0;
+    }
+    innov_cov(J, C, s2 / o->w, S, CJt);
+    if (!inv2(S, Si)) {
+        return 0;
+    }
+    const rp_real r[2] = {o->uv[0] - uv[0], o->uv[1] - uv[1]};
+    const rp_real g[2] = {Si[0] * r[0] + Si[1] * r[1], Si[2] * r[0] + Si[3] * r[1]};
+    rp_real d[NP]; /* p = p0 [+] d, the chart of rp_rig.h */
+    for (int a = 0; a < NP; ++a) {
+        d[a] = CJt[a * 2] * g[0] + CJt[a * 2 + 1] * g[1];
+    }
+    return rp_pose_plus(base->x, d, p) == RP_OK;
+}
+
+/* Step 1 from base (the prior; in the rescue's consensus, the low-innovation posterior): up to
+ * the adaptive count of hypotheses, each drawn from usable observations (s->ok, n_ok of them)
+ * uniformly: one, then one of each further camera up to prm->hyp_cams (rp_ekf1pt.h), base's
+ * pose updated by them; its support at pixel threshold thr2 and, for each new best, its local
+ * optimisation. On return s->best is the largest support, s->post its refined posterior (base
+ * if none was refined), *n_hyp the hypotheses drawn; returns the support's size. */
 static uint32_t draw_consensus(rp_ekf1pt_t *s, const rp_ekf_t *base, const rp_rig_t *rig,
                                const rp_obs_t *obs, uint32_t n, uint32_t n_ok,
                                const rp_ekf1pt_params_t *prm, rp_real s2, rp_real thr2,
                                uint32_t *n_hyp)
 {
     rp_real C[36];
-    const rp_real *p0 = base->x;
     campose_t cp0 = {0};
     pose_cov(base, C);
     s->post = *base;
-    uint32_t best = 0, need = prm->max_hyp, h = 0;
+    uint32_t best = 0, need = prm->max_hyp, h = 0, m_pool = 0, cams = 0;
+    for (uint32_t k = 0; k < n; ++k) { /* s->pool[j]: the j-th usable observation */
+        if (s->ok[k]) {
+            s->pool[m_pool++] = (uint16_t)k;
+            cams |= 1u << obs[k].cam;
+        }
+    }
+    uint32_t m_hyp = 0; /* observations of a hypothesis: hyp_cams, or the cameras there are */
+    for (; cams != 0u; cams &= cams - 1u) {
+        m_hyp++;
+    }
+    m_hyp = m_hyp < prm->hyp_cams ? m_hyp : prm->hyp_cams;
     memset(s->best, 0, n);
-    for (; h < need && n_ok > 0; ++h) {
-        uint32_t pick = rp_rng_below(&s->rng, n_ok), i = 0;
-        for (uint32_t k = 0; k < n; ++k) { /* the pick-th usable observation */
-            if (s->ok[k] && pick-- == 0) {
-                i = k;
-                break;
+    for (; h < need && m_pool > 0; ++h) {
+        const uint32_t i = s->pool[rp_rng_below(&s->rng, m_pool)];
+        uint32_t m = 1, in_cams = 1u << obs[i].cam;
+        s->sel[0] = obs[i];
+        for (int t = 0; t < RP_EKF1PT_HYP_TRIES && m < m_hyp; ++t) {
+            const uint32_t j = s->pool[rp_rng_below(&s->rng, m_pool)];
+            if (!(in_cams & (1u << obs[j].cam))) {
+                in_cams |= 1u << obs[j].cam;
+                s->sel[m++] = obs[j];
             }
         }
-        rp_real uv[2], J[12], S[4], Si[4], CJt[12];
-        if (!obs_pose(base, p0, &obs[i], &cp0) ||
-            rp_rig_project(rig, obs[i].cam, &cp0.pl, obs[i].M, uv, J, NULL) != RP_OK) {
-            continue;
-        }
-        innov_cov(J, C, s2 / obs[i].w, S, CJt);
-        if (!inv2(S, Si)) {
-            continue;
-        }
-        const rp_real r[2] = {obs[i].uv[0] - uv[0], obs[i].uv[1] - uv[1]};
-        const rp_real g[2] = {Si[0] * r[0] + Si[1] * r[1], Si[2] * r[0] + Si[3] * r[1]};
-        rp_real p[NP], d[NP]; /* p = p0 [+] d, the chart of rp_rig.h */
-        for (int a = 0; a < NP; ++a) {
-            d[a] = CJt[a * 2] * g[0] + CJt[a * 2 + 1] * g[1];
-        }
-        if (rp_pose_plus(p0, d, p) != RP_OK) {
-            continue;
+        rp_real p[NP];
+        if (m == 1) {
+            if (!hyp_one(base, rig, &obs[i], C, s2, &cp0, p)) {
+                continue;
+            }
+        } else {
+            s->hyp = *base;
+            s->hyp.prm.iterations = LO_ITERATIONS;
+            s->hyp.prm.min_features = 1;
+            if (rp_ekf_update(&s->hyp, rig, s->sel, m, NULL, NULL) != RP_OK) {
+                continue;
+            }
+            memcpy(p, s->hyp.x, sizeof(p));
         }
         const uint32_t c = support(s, rig, base, obs, n, p, thr2, n_ok, best);
         if (c > best) {
@@ -260,7 +305,7 @@ static uint32_t draw_consensus(rp_ekf1pt_t *s, const rp_ekf_t *base, const rp_ri
                 best = c_lo;
                 memcpy(s->best, s->cand, n);
             }
-            need = draws_needed(prm, (rp_real)best / (rp_real)n_ok);
+            need = draws_needed(prm, (rp_real)best / (rp_real)n_ok, m_hyp);
         }
     }
     *n_hyp = h;
@@ -390,7 +435,8 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
     }
     if (!s || !ekf || !rig || (n > 0 && !obs) || n > RP_EKF1PT_MAX_OBS ||
         !(prm->confidence > RP_C(0.0) && prm->confidence < RP_C(1.0)) || prm->max_hyp < 1 ||
-        prm->min_hyp > prm->max_hyp || prm->plain_without_majority > 1 || prm->regroup > 1) {
+        prm->min_hyp > prm->max_hyp || prm->plain_without_majority > 1 || prm->regroup > 1 ||
+        prm->hyp_cams < 1 || prm->hyp_cams > RP_MAX_CAMS) {
         return RP_E_ARG;
     }
     if (used) {
