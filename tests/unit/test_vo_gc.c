@@ -301,11 +301,12 @@ static void gross_outliers(rp_frameset_t *fs, uint32_t j)
 
 /* Feature-level simulation with 30 % gross outliers in every camera at every frame (issue 14's
  * must-show: gc within 1.5x of its clean figures). On this small sample (2 runs x 60 frames,
- * the defaults: 1-point RANSAC and the re-find) tx ty tz are 0.4-0.7x and alpha beta gamma
- * 1.3-1.9x the clean figures (4 runs: 0.4-0.5x and 1.2-2.3x), the plain gated update 34-271x;
- * over 50 runs x 100 frames (`rigpose-sim --outliers 0.3`, docs/results.md) gc is 0.95-0.99x in
- * translation and 2.1-3.3x in rotation: NOT met in rotation. Pinned here: the small sample's
- * translations, and that the plain update misses them; the angles are printed. */
+ * the defaults: 1-point RANSAC, the re-find, keyframes of the window adjustment holding only
+ * the pixels their landmark's structure gate took) the six columns are 0.8-1.4x the clean
+ * figures, the plain gated update 34-271x; over 50 runs x 100 frames (`rigpose-sim --outliers
+ * 0.3`, docs/results.md) 1.04-1.43x. With every pixel of a keyframe's landmarks in the window
+ * (before) the angles were 1.3-2.0x here and 2.1-3.3x over the 50 runs: the outliers in the
+ * windows had the adjustments refused, and gc's rotations drifted without them. */
 static void test_thirty_percent_gross_outliers_everywhere(void **state)
 {
     (void)state;
@@ -339,7 +340,7 @@ static void test_thirty_percent_gross_outliers_everywhere(void **state)
     }
     print_message("worst column: %.1fx clean with the defaults, %.1fx with the plain update\n",
                   w_robust, w_plain);
-    for (int i = 0; i < 3; ++i) assert_true(robust[i] <= 1.5 * clean[i]);
+    for (int i = 0; i < 6; ++i) assert_true(robust[i] <= 1.5 * clean[i]);
     assert_true(w_plain > 1.5); /* the test can fail */
 }
 

@@ -56,14 +56,19 @@
  *     one common factor that no single frame shows. The map is therefore kept in map units: the offsets the filter projects
  *     with are D_k * mu (mu: map units per metre), output translations are divided by mu, new
  *     features start at init_depth_m * mu. Every ba_stride frames the updated pose and the
- *     pixels of ba_per_cam landmarks per camera become a keyframe; every ba_every keyframes
+ *     pixels of ba_per_cam landmarks per camera become a keyframe (only pixels that their
+ *     landmark's structure gate took in step 3: the frame's outliers stay out of the window;
+ *     with them, 30 % gross outliers had every window refused); every ba_every keyframes
  *     (once RP_VO_GC_BA_MIN_KF are held) a window bundle adjustment in metres over the last
  *     ba_kf keyframes (rp_gcba.h; run in pieces, one per frame set, the piece of a frame set
  *     that re-found its pose in step 2 waiting for the next one, so that the two largest
  *     costs of the estimator do not add up) says which mu the window implies, and a scalar filter on
  *     mu (prior 1 +- mscale_sigma) takes it with its variance times ba_var_scale. Refused (counted in
  *     n_ba_rejected): a failed adjustment, one whose RMS residual stays over
- *     RP_VO_GC_BA_MAX_RMS ba.sigma_px, one more than RP_VO_GC_BA_GATE_SIGMA sigma from the
+ *     RP_VO_GC_BA_MAX_RMS ba.sigma_px, one that took no step (its first Gauss-Newton step
+ *     raised the cost, so it ends at the mu it started from and would confirm that mu with its
+ *     own variance: on real tracks such windows locked mu at its prior), one more than
+ *     RP_VO_GC_BA_GATE_SIGMA sigma from the
  *     current mu (after RP_VO_GC_BA_MAX_REFUSED such refusals in a row the current mu is the
  *     suspect: its variance goes back to the prior and the next one is taken).
  *     A taken adjustment also (a) moves each landmark with its camera's centre at the new
@@ -183,6 +188,9 @@ typedef struct {
                                             * frame */
     uint8_t mature[RP_IDMAP_MAX_SLOTS];    /* by slot of lm: 1 once the landmark's depth has
                                             * converged (it enters the pose update) */
+    uint32_t taken[RP_IDMAP_MAX_SLOTS];    /* by slot of lm: frame + 1 of the last pixel its
+                                            * structure EKF's gate took (step 3); 0: none (a
+                                            * keyframe holds this frame's taken ones, step 6) */
     uint32_t frame;                        /* frames processed */
     int64_t prev_utime;
     rp_obs_t obs[RP_VO_GC_MAX_OBS];        /* scratch: this frame's observations */

@@ -48,6 +48,7 @@ static rp_status_t lm_insert(rp_vo_gc_t *vo, uint32_t id, uint8_t cam, const rp_
     rp_status_t st = rp_lmtab_insert(&vo->lm, id, cam, pt, &slot);
     if (st == RP_OK) {
         vo->mature[slot] = 0;
+        vo->taken[slot] = 0;
     }
     return st;
 }
@@ -480,10 +481,11 @@ static void refine_structure(rp_vo_gc_t *vo, uint32_t n)
         }
         const rp_real lam = proj_var_max(Jp, 6, Ppp, 0);
         const rp_real sig = rp_sqrt(s2 + (lam > RP_C(0.0) ? lam : RP_C(0.0)));
-        /* a rejected update leaves the point as it was */
-        /* ignored: a point its gate refuses stays as it was (the gate, not a fault) */
-        (void)rp_struct_update(pt, &vo->rig_m, cam, &pl, vo->obs[i].uv, sig,
-                               vo->cfg.ekf.gate_chi2);
+        /* a point its gate refuses stays as it was (the gate, not a fault) */
+        if (rp_struct_update(pt, &vo->rig_m, cam, &pl, vo->obs[i].uv, sig,
+                             vo->cfg.ekf.gate_chi2) == RP_OK) {
+            vo->taken[s] = vo->frame + 1u;
+        }
     }
 }
 

@@ -211,11 +211,14 @@ static void take_adjustment(rp_vo_gc_t *vo)
     const rp_status_t st = rp_gcba_finish(&vo->ba, r);
     const rp_real var_obs = r->mu_var * vo->cfg.ba_var_scale;
     const rp_real dm = r->mu - vo->mu;
-    /* refused: a failed or unconverged adjustment (residuals well above the pixel noise), or
-     * one more than RP_VO_GC_BA_GATE_SIGMA sigma from the current unit; after
-     * RP_VO_GC_BA_MAX_REFUSED such refusals in a row of converged adjustments the current unit
-     * is the suspect: it restarts from the next one */
-    if (st != RP_OK || r->rms_px > RP_VO_GC_BA_MAX_RMS * vo->cfg.ba.sigma_px) {
+    /* refused: a failed or unconverged adjustment (residuals well above the pixel noise), one
+     * that took no step (its first one raised the cost: it ends where it began, at the unit it
+     * started from, which it would then confirm with its own variance), or one more than
+     * RP_VO_GC_BA_GATE_SIGMA sigma from the current unit; after RP_VO_GC_BA_MAX_REFUSED such
+     * refusals in a row of converged adjustments the current unit is the suspect: it restarts
+     * from the next one */
+    if (st != RP_OK || r->rms_px > RP_VO_GC_BA_MAX_RMS * vo->cfg.ba.sigma_px ||
+        !(r->rms_px < r->rms0_px)) {
         vo->n_ba_rejected++;
         return;
     }
@@ -275,7 +278,8 @@ void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, int busy)
             const rp_feat_t *ft = &fs->f[cam][f];
             uint16_t slot;
             if (!rp_all_finite(ft->uv, 2) || rp_lmtab_find(&vo->lm, ft->id, &slot) != RP_OK ||
-                vo->lm.map.slot_group[slot] != cam) {
+                vo->lm.map.slot_group[slot] != cam ||
+                (vo->frame > 0 && vo->taken[slot] != vo->frame + 1u)) {
                 continue;
             }
             vo->kf_hash[nc] = rp_idmap_hash(ft->id);
