@@ -189,8 +189,9 @@ typedef struct {
     uint8_t mature[RP_IDMAP_MAX_SLOTS];    /* by slot of lm: 1 once the landmark's depth has
                                             * converged (it enters the pose update) */
     uint32_t taken[RP_IDMAP_MAX_SLOTS];    /* by slot of lm: frame + 1 of the last pixel its
-                                            * structure EKF's gate took (step 3); 0: none (a
-                                            * keyframe holds this frame's taken ones, step 6) */
+                                            * structure EKF's gate took (step 3), or of the
+                                            * one that placed it (a keyframe holds this
+                                            * frame's taken ones, step 6) */
     uint32_t frame;                        /* frames processed */
     int64_t prev_utime;
     rp_obs_t obs[RP_VO_GC_MAX_OBS];        /* scratch: this frame's observations */

@@ -204,12 +204,6 @@ static uint32_t local_opt(rp_ekf1pt_t *s, const rp_ekf_t *base, const rp_rig_t *
     return support(s, rig, &s->post, obs, n, s->post.x, thr2, n_ok, 0);
 }
 
-/* Step 1 from base (the prior; in the rescue's consensus, the low-innovation posterior): up to
- * the adaptive count of hypotheses, each base's pose updated by one usable observation (s->ok,
- * n_ok of them) drawn uniformly, its support at pixel threshold thr2 and, for each new best,
- * its local optimisation. On return s->best is the largest support, s->post its refined
- * posterior (base if none was refined), *n_hyp the hypotheses drawn; returns the support's
- * size. */
 /* Hypothesis from the single observation i: base's pose updated by it (one linearisation at
  * base's pose p0, pose covariance C) into p. 0 if it cannot be formed. */
 static int hyp_one(const rp_ekf_t *base, const rp_rig_t *rig, const rp_obs_t *o,

@@ -48,7 +48,7 @@ static rp_status_t lm_insert(rp_vo_gc_t *vo, uint32_t id, uint8_t cam, const rp_
     rp_status_t st = rp_lmtab_insert(&vo->lm, id, cam, pt, &slot);
     if (st == RP_OK) {
         vo->mature[slot] = 0;
-        vo->taken[slot] = 0;
+        vo->taken[slot] = vo->frame + 1u; /* the pixel that placed it */
     }
     return st;
 }

@@ -278,8 +278,7 @@ void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, int busy)
             const rp_feat_t *ft = &fs->f[cam][f];
             uint16_t slot;
             if (!rp_all_finite(ft->uv, 2) || rp_lmtab_find(&vo->lm, ft->id, &slot) != RP_OK ||
-                vo->lm.map.slot_group[slot] != cam ||
-                (vo->frame > 0 && vo->taken[slot] != vo->frame + 1u)) {
+                vo->lm.map.slot_group[slot] != cam || vo->taken[slot] != vo->frame + 1u) {
                 continue;
             }
             vo->kf_hash[nc] = rp_idmap_hash(ft->id);
