@@ -11,8 +11,9 @@
 # daemon's resident set size is sampled every 0.02 s from /proc. Fails on: an exit other than
 # 0, a pose count other than asked, a gap in seq, a non-finite pose or covariance, any LOST or
 # COV_RESET flag (neither has a cause on these runs), resident memory growing by 1 % or more
-# after the warm-up (the first fifth of the run), compared with the largest sample of the
-# warm-up's end. Prints the figures; OUT_JSON (optional) receives soak_frames,
+# after the warm-up (the first fifth of the run's frame sets, told by the size of the pose log
+# at each sample, not by time: a slow start on a loaded machine does not move memory that the
+# early frame sets touch past it), compared with the largest sample of the warm-up's end. Prints the figures; OUT_JSON (optional) receives soak_frames,
 # soak_image_frames, soak_rss_growth_pct (the larger of the two runs), soak_sets_per_s.
 set -u
 BUILD=${1:?usage: soak.sh BUILD N_FEAT N_IMG [OUT_JSON]}
@@ -32,7 +33,9 @@ run() {
   local pid=$!
   : >"$TMP/$name.rss"
   while kill -0 $pid 2>/dev/null; do
-    awk '/^VmRSS:/ {print $2}' /proc/$pid/status 2>/dev/null >>"$TMP/$name.rss"
+    # RSS (kB) and the pose log's size (bytes: frame sets done) at the same moment
+    echo "$(awk '/^VmRSS:/ {print $2}' /proc/$pid/status 2>/dev/null)" \
+         "$(stat -c %s "$TMP/$name.log" 2>/dev/null || echo 0)" >>"$TMP/$name.rss"
     sleep 0.02
   done
   wait $pid; echo $? >"$TMP/$name.rc"
@@ -62,10 +65,14 @@ for ev in lcm.EventLog(log, "r"):
         nonfinite += 1
     lost += (p.flags & pose_t.FLAG_LOST) != 0
     covreset += (p.flags & pose_t.FLAG_COV_RESET) != 0
-rss = [int(x) for x in open(rss_file).read().split() if x.strip()]
+import os
+samples = [l.split() for l in open(rss_file) if len(l.split()) == 2]
+rss = [int(a) for a, _ in samples]
+size = [int(b) for _, b in samples]
+total = os.path.getsize(log)
 growth = float("nan")
-if len(rss) >= 10:
-    w = max(1, len(rss) // 5)
+w = sum(1 for b in size if b <= total // 5)  # samples within the first fifth of the sets
+if len(rss) >= 10 and 1 <= w < len(rss):
     base = max(rss[max(0, w - 3):w])    # the warm-up's end
     growth = 100.0 * (max(rss[w:]) - base) / base
 if rc != 0: bad.append("exit %d" % rc)
@@ -74,11 +81,11 @@ if gaps: bad.append("%d gaps in seq" % gaps)
 if nonfinite: bad.append("%d non-finite poses" % nonfinite)
 if lost: bad.append("%d LOST" % lost)
 if covreset: bad.append("%d COV_RESET" % covreset)
-if not (growth < 1.0): bad.append("RSS growth %.3f %% (samples %d)" % (growth, len(rss)))
-print("%s %s: %d sets in %.1f s (%.0f sets/s), no gap %s, RSS %s kB after warm-up -> max %s kB "
+if not (growth < 1.0): bad.append("RSS growth %.3f %% (samples %d, %d in the warm-up)" % (growth, len(rss), w))
+print("%s %s: %d sets in %.1f s (%.0f sets/s), no gap %s, RSS %s kB after warm-up (%d of %d samples) -> max %s kB "
       "(growth %.3f %%), LOST %d, COV_RESET %d, non-finite %d%s" % (
       "ok  " if not bad else "FAIL", name, count, secs, count / secs if secs > 0 else 0,
-      gaps == 0, rss[max(0, len(rss) // 5 - 1)] if rss else "-", max(rss) if rss else "-",
+      gaps == 0, rss[w - 1] if 1 <= w <= len(rss) else "-", w, len(rss), max(rss) if rss else "-",
       growth, lost, covreset, nonfinite, "" if not bad else ": " + "; ".join(bad)))
 print("GROWTH %.6f" % growth)
 print("RATE %.3f" % (count / secs if secs > 0 else 0))
