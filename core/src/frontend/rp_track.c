@@ -684,7 +684,36 @@ static int32_t det_responses(rp_tracker_t *trk, int a, int b, int c, int xa, int
         vyy[x] = trk->prod[a][2][x] + trk->prod[b][2][x] + trk->prod[c][2][x];
     }
     int32_t best = 0;
-    for (int x = xa; x < xb; ++x) {
+    int x = xa;
+#if RP_V8_VEC
+    /* four pixels at a time, the same integers: the discriminant (< 2^51) is exact in a double,
+     * its square root correctly rounded (IEEE 754), and for D < 2^52 the rounded root never
+     * reaches the next integer (sqrt(n^2 - 1) is 1 / 2n below n, more than half an ulp of n), so
+     * truncating it is isqrt52's floor(sqrt(D)); lanes under the floor give 0 */
+    typedef double v4d_t __attribute__((vector_size(32)));
+    const v4_t fl = {floor_r, floor_r, floor_r, floor_r};
+    v4_t vbest = v4_zero();
+    for (; x + 4 <= xb; x += 4) {
+        const v4_t sxx = v4_add(v4_add(v4_ld(vxx + x - 1), v4_ld(vxx + x)), v4_ld(vxx + x + 1));
+        const v4_t sxy = v4_add(v4_add(v4_ld(vxy + x - 1), v4_ld(vxy + x)), v4_ld(vxy + x + 1));
+        const v4_t syy = v4_add(v4_add(v4_ld(vyy + x - 1), v4_ld(vyy + x)), v4_ld(vyy + x + 1));
+        const v4_t lt = sxx < syy;
+        const v4_t mn = (lt & sxx) | (~lt & syy);
+        const v4_t pass = (mn + mn) >= fl;
+        const v4d_t d = __builtin_convertvector(sxx - syy, v4d_t);
+        const v4d_t q = __builtin_convertvector(sxy, v4d_t);
+        const v4d_t disc = d * d + 4.0 * q * q;
+        const v4d_t root = {sqrt(disc[0]), sqrt(disc[1]), sqrt(disc[2]), sqrt(disc[3])};
+        const v4_t r = (sxx + syy - __builtin_convertvector(root, v4_t)) & pass;
+        v4_st(out + x, r);
+        const v4_t gt = r > vbest;
+        vbest = (gt & r) | (~gt & vbest);
+    }
+    for (int k = 0; k < 4; ++k) {
+        best = vbest[k] > best ? vbest[k] : best;
+    }
+#endif
+    for (; x < xb; ++x) {
         const int32_t sxx = vxx[x - 1] + vxx[x] + vxx[x + 1];
         const int32_t sxy = vxy[x - 1] + vxy[x] + vxy[x + 1];
         const int32_t syy = vyy[x - 1] + vyy[x] + vyy[x + 1];
