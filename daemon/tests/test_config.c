@@ -932,6 +932,7 @@ static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
     else if (IS("drop_odds") && st) v[0] = (double)p->stereo.drop_odds;
     else if (IS("retry_triangulation") && st) v[0] = p->stereo.retry_triangulation;
     else if (IS("retire_outliers") && st) v[0] = p->stereo.retire_outliers;
+    else if (IS("add_landmarks") && st) v[0] = p->stereo.add_landmarks;
     else if (IS("dormant_retired") && st) v[0] = p->dormant_retired;
     else if (IS("init_depth_m") && !st) {
         v[0] = (double)(gc ? p->gc.init_depth_m : p->mono.init_depth_m);
@@ -1105,7 +1106,7 @@ static void test_readme_lists_the_core_defaults(void **state)
     printf("config/README.md: %u estimator and %u tracker defaults match the core's\n",
            est_rows, trk_rows);
     /* every setting the parser knows is listed (rp_config.c's keys but method, pairs, cams) */
-    assert_int_equal(est_rows, 30);
+    assert_int_equal(est_rows, 31);
     assert_int_equal(trk_rows, 7);
 }
 

@@ -64,6 +64,7 @@
     X(stereo.one_point, RP_CD_STEREO, U) X(stereo.drop_odds, RP_CD_STEREO, R)                    \
     X(stereo.retry_triangulation, RP_CD_STEREO, U)                                                \
     X(stereo.retire_outliers, RP_CD_STEREO, U) X(dormant_retired, RP_CD_STEREO, U)               \
+    X(stereo.add_landmarks, RP_CD_STEREO, U)                                                      \
     X(gc.n_cams, RP_CD_GC, U) X(gc.cams, RP_CD_GC, A) RP_CD_EKF_FIELDS(X, gc.ekf, RP_CD_GC)      \
     X(gc.min_tracked, RP_CD_GC, U) X(gc.init_depth_m, RP_CD_GC, R)                               \
     X(gc.init_depth_sigma_m, RP_CD_GC, R) X(gc.init_on_sphere, RP_CD_GC, U)                      \

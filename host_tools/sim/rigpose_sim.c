@@ -93,6 +93,7 @@ typedef struct {
     double model_jitter_s;     /* --model-jitter: the clocks' jitter as the filters' (s), or 0 */
     int time_noise_per_feature; /* --time-noise-per-feature: rp_ekf_params_t.group_time_noise 0 */
     int plain_update;           /* --plain-update: no 1-point RANSAC and no RANSAC re-find */
+    int paper_map;              /* --paper-map: stereo add_landmarks 0 */
 } method_opts_t;
 
 /* --estimate-offsets, --known-offsets on a layout's filter parameters. */
@@ -142,6 +143,9 @@ static rp_vo_stereo_cfg_t stereo_cfg(const method_opts_t *o, int both_pairs)
     if (o->plain_update) {
         cfg.one_point = 0;
         cfg.ransac = 0;
+    }
+    if (o->paper_map) {
+        cfg.add_landmarks = 0;
     }
     offsets_opt(o, &cfg.ekf);
     return cfg;
@@ -341,6 +345,7 @@ typedef struct {
     int model_jitter;
     int time_noise_per_feature; /* --time-noise-per-feature */
     int plain_update;         /* --plain-update */
+    int paper_map;            /* --paper-map */
     int layout_study;         /* --layout-study given */
     const char *layout_file;  /* its FILE, or NULL for the built-in grid */
     int methods_given, runs_given, frames_given;
@@ -408,6 +413,8 @@ static void usage(FILE *out, const char *argv0)
             "                   every method)\n"
             "  --plain-update   every layout's plain gated EKF update: no 1-point RANSAC, no\n"
             "                   RANSAC re-find (one_point 0, ransac 0), for ablation\n"
+            "  --paper-map      stereo layouts: landmarks only at (re-)initialisations and as\n"
+            "                   retried failed matches (add_landmarks 0), the paper's map\n"
             "  --threads N      worker threads (default: online CPUs)\n"
             "  --ekf-iterations N  Gauss-Newton iterations of the EKF update (default 3;\n"
             "                   1 = the plain EKF), for ablation\n"
@@ -589,6 +596,10 @@ static int parse_args(int argc, char **argv, opts_t *o)
         }
         if (strcmp(arg, "--plain-update") == 0) {
             o->plain_update = 1;
+            continue;
+        }
+        if (strcmp(arg, "--paper-map") == 0) {
+            o->paper_map = 1;
             continue;
         }
         if (strcmp(arg, "--time-noise-per-feature") == 0) {
@@ -901,7 +912,8 @@ static void *worker(void *arg)
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
                                o->known_offsets ? o->cam_offset_s : NULL,
                                o->model_jitter ? o->jitter_ms * 1e-3 : 0.0,
-                               o->time_noise_per_feature, o->plain_update};
+                               o->time_noise_per_feature, o->plain_update,
+                               o->paper_map};
     void *state[MAX_METHODS] = {NULL};
     rp_frameset_t *fs = malloc(sizeof *fs);
     rp_rig_t rig;
@@ -1140,6 +1152,9 @@ static void print_json(const opts_t *o, const summary_t *s)
     if (o->plain_update) {
         printf("\"plain_update\": 1, ");
     }
+    if (o->paper_map) {
+        printf("\"paper_map\": 1, ");
+    }
     if (o->clocks_given) {
         const struct { const char *key; const double *v; } lists[] = {
             {"cam_offsets_ms", o->cam_offset_ms}, {"cam_phase_ms", o->cam_phase_ms},
@@ -1250,6 +1265,9 @@ static void print_table(const opts_t *o, const rp_sim_cfg_t *cfg, const summary_
     }
     if (o->plain_update) {
         printf("  ablation: the plain gated update (no 1-point RANSAC, no re-find)\n\n");
+    }
+    if (o->paper_map) {
+        printf("  ablation: the paper's stereo map (landmarks only at (re-)initialisations)\n\n");
     }
     if (o->ekf_iterations || o->no_refine) {
         printf("  ablation: EKF iterations %u, structure refinement %s\n\n",
@@ -1520,7 +1538,8 @@ static void print_deviations(const opts_t *o)
     const method_opts_t mo = {o->noise_px, o->ekf_iterations, o->no_refine, o->est_offsets,
                                o->known_offsets ? o->cam_offset_s : NULL,
                                o->model_jitter ? o->jitter_ms * 1e-3 : 0.0,
-                               o->time_noise_per_feature, o->plain_update};
+                               o->time_noise_per_feature, o->plain_update,
+                               o->paper_map};
     for (unsigned i = 0; i < o->n_methods; ++i) {
         const rp_pipe_layout_t l = o->m[i]->layout;
         rp_pipe_cfg_t cfg;

@@ -873,6 +873,7 @@ static const est_key_t est_keys[] = {
     {"drop_odds", K_REAL, 1.0, 1e12, 1, 1, {F(stereo.drop_odds)}},
     {"retry_triangulation", K_BOOL, 0, 1, 0, 1, {F(stereo.retry_triangulation)}},
     {"retire_outliers", K_BOOL, 0, 1, 0, 1, {F(stereo.retire_outliers)}},
+    {"add_landmarks", K_BOOL, 0, 1, 0, 1, {F(stereo.add_landmarks)}},
     {"dormant_retired", K_BOOL, 0, 1, 0, 1, {F(dormant_retired)}},
     {"init_depth_m", K_REAL, 0.0, 1e4, 1, 2, {F(gc.init_depth_m), F(mono.init_depth_m)}},
     {"init_depth_sigma_m", K_REAL, 0.0, 1e4, 1, 2,
@@ -924,7 +925,7 @@ static int parse_estimator(ctx_t *c, const yaml_node_t *root, rp_config_t *cfg)
         "q_rot",       "gate_chi2",    "iterations",    "min_features",     "min_tracked",
         "max_epipolar_px", "min_depth_m", "max_depth_m", "max_reproj_px",   "refine_structure",
         "ransac",      "one_point",    "drop_odds",     "retry_triangulation", "retire_outliers",
-        "dormant_retired",
+        "dormant_retired", "add_landmarks",
         "init_depth_m", "init_depth_sigma_m", "init_on_sphere", "default_dt_s",
         "metric_scale_sigma", "max_predict_s", "estimate_time_offsets", "time_offset_sigma_s",
         "time_offset_q", "max_pair_skew_s", "time_jitter_s", "group_time_noise", NULL};

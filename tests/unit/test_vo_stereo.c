@@ -259,9 +259,53 @@ static void test_failed_matches_are_retried_with_their_first_pixels(void **state
     assert_true(tr[0] < 0.9 * tr[1]);
     g_both = 0;
     cfg.retry_triangulation = 0;
+    cfg.add_landmarks = 0; /* the paper's map: the failed matches wait for a re-initialisation */
     assert_int_equal(run_sequence(fx, &cfg, 2, bad_matches_at_frame_0, err, &flags), 0);
     assert_true(retried_trace(&fx->vo) < 0.0);
     assert_int_equal(fx->vo.n_retry[0], 0);
+    cfg.add_landmarks = 1; /* every match not yet a landmark is tried at frame 1 anyway */
+    assert_int_equal(run_sequence(fx, &cfg, 2, bad_matches_at_frame_0, err, &flags), 0);
+    assert_true(retried_trace(&fx->vo) > 0.0);
+    simfx_free(fx);
+}
+
+/* Ids of frame set fs seen in both cameras of pair (a, b). */
+static uint16_t matched_ids(const rp_frameset_t *fs, uint8_t a, uint8_t b)
+{
+    uint16_t m = 0;
+    for (uint16_t i = 0; i < fs->n[a]; ++i) {
+        for (uint16_t j = 0; j < fs->n[b]; ++j) {
+            m = (uint16_t)(m + (fs->f[a][i].id == fs->f[b][j].id));
+        }
+    }
+    return m;
+}
+
+/* add_landmarks (rp_vo_stereo.h, step 5): the points that come into view become landmarks as
+ * they are matched, so the map follows the view: after 100 frames of the paper's motion the
+ * map holds nearly every match of the last frame set (a few fail the checks), where the
+ * paper's map (add_landmarks 0) holds only what its initialisation saw and still tracks.
+ * Checked on the structure of the two runs, not on their errors. */
+static void test_new_matches_become_landmarks(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.5, 100, 0);
+    uint16_t n_lm[2] = {0, 0}, n_match = 0;
+    for (int add = 0; add < 2; ++add) {
+        rp_vo_stereo_cfg_t cfg = stereo_cfg(2, 0.5);
+        cfg.add_landmarks = (uint8_t)add;
+        assert_ok(rp_vo_stereo_init(&fx->vo, &fx->sim.sr.rig, &cfg));
+        simfx_score_t sc;
+        simfx_run(&fx->sim, stereo_step, &fx->vo, 100, NULL, NULL, NULL, &sc);
+        assert_int_equal(sc.lost, 0);
+        n_lm[add] = fx->vo.lm.map.n;
+        n_match = (uint16_t)(matched_ids(&fx->sim.fs, RP_SIM_CAM1, RP_SIM_CAM1B) +
+                             matched_ids(&fx->sim.fs, RP_SIM_CAM3, RP_SIM_CAM3B));
+    }
+    print_message("matches in the last frame set %u; landmarks %u with the paper's map, %u with "
+                  "landmarks added\n", n_match, n_lm[0], n_lm[1]);
+    assert_true(n_lm[1] >= n_match * 9 / 10);
+    assert_true(n_lm[0] < n_match / 2);
     simfx_free(fx);
 }
 
@@ -744,6 +788,7 @@ int main(void)
         cmocka_unit_test(test_nan_pixels_are_skipped),
         cmocka_unit_test(test_prediction_off_along_one_pairs_blind_direction_is_recovered),
         cmocka_unit_test(test_failed_matches_are_retried_with_their_first_pixels),
+        cmocka_unit_test(test_new_matches_become_landmarks),
         cmocka_unit_test(test_outliers_at_the_start_frame_are_left_out),
         cmocka_unit_test(test_gross_outliers_at_the_start_are_found_by_ransac),
         cmocka_unit_test(test_turn_onset_with_outliers_is_refound_by_ransac),

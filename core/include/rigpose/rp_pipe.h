@@ -25,7 +25,8 @@
  * frame set the two cameras of a pair share the ids of every feature that was matched at its
  * birth and is still tracked in both; the stereo estimator triangulates
  * these whenever it (re-)initialises (its backtracking uses the previous frame set, which
- * carries them too). Matching costs only at births, not every frame.
+ * carries them too) and, with add_landmarks, every frame set those not yet landmarks
+ * (rp_vo_stereo.h, step 5). Matching costs only at births, not every frame.
  *
  * Top-ups take turns. Of the trackers that detect (all but the pairs' second cameras), one per
  * frame set may top up: the d-th of n_det on the frame sets whose number (rp_pipe_info_t.frame)

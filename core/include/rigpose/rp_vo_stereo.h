@@ -29,6 +29,11 @@
  *     left out of that consensus.
  *  4. (beyond the paper) Each landmark's structure EKF takes the frame's observations at the
  *     updated pose, so the structure improves instead of staying at its first triangulation.
+ *  5. (beyond the paper, `add_landmarks`) Each pair's matches that are not landmarks yet (new
+ *     features matched at their birth since, failed checks before, not retired) are
+ *     triangulated at the updated pose with the same checks and added: the map follows the
+ *     view instead of running down to min_tracked and being rebuilt at once, which on a real
+ *     clip happened every 30-40 frames and moved the trajectory each time.
  *  A landmark missing from a frame (its track lost in both cameras) is dropped for good.
  */
 #ifndef RP_VO_STEREO_H
@@ -84,13 +89,17 @@ typedef struct {
     uint8_t retire_outliers;        /* 1: the track of a landmark dropped as an outlier is not
                                      * triangulated again while it is tracked (below); 0: a
                                      * re-initialisation takes every matched track */
+    uint8_t add_landmarks;          /* 1: every frame set (step 5), each pair's matches that are
+                                     * not landmarks yet are triangulated at the updated pose and
+                                     * added (beyond the paper); 0: only at (re-)initialisations
+                                     * and as retried failed matches, as the paper's map */
 } rp_vo_stereo_cfg_t;
 
 /* Defaults: rp_ekf_default_params with plant noise q_trans = 3 m^2/s^3, q_rot = 3 rad^2/s^3
  * (config/README.md says why); the paper's threshold of 50, 1.5 px epipolar band,
  * 0.05..100 m, 1.5 px, 1/30 s, structure refinement on, rig RANSAC on, 1-point RANSAC on (its
  * cost: config/README.md), landmarks dropped at odds of 100 to 1, failed matches retried,
- * outlier tracks retired.
+ * outlier tracks retired, new matches added as landmarks every frame set.
  * No pairs (n_pairs = 0): the caller
  * (or rp_pipe_default_cfg) names them. */
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);

@@ -31,6 +31,7 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.drop_odds = RP_C(100.0); /* rp_vo_stereo.h, "Dropping a landmark" */
     c.retry_triangulation = 1;
     c.retire_outliers = 1; /* rp_vo_stereo.h: a track that lied once is not believed again */
+    c.add_landmarks = 1;   /* rp_vo_stereo.h, step 5 */
     return c;
 }
 
@@ -59,7 +60,7 @@ rp_status_t rp_vo_stereo_init(rp_vo_stereo_t *vo, const rp_rig_t *rig,
         !(cfg->max_pair_skew_s >= RP_C(0.0)) || !rp_finite(cfg->max_pair_skew_s) ||
         !(cfg->default_dt_s > RP_C(0.0)) || cfg->ransac > 1 || cfg->one_point > 1 ||
         !(cfg->drop_odds > RP_C(1.0)) || !rp_finite(cfg->drop_odds) ||
-        cfg->retry_triangulation > 1 || cfg->retire_outliers > 1) {
+        cfg->retry_triangulation > 1 || cfg->retire_outliers > 1 || cfg->add_landmarks > 1) {
         return RP_E_ARG;
     }
     uint8_t in_use[RP_MAX_CAMS] = {0};
@@ -886,11 +887,20 @@ rp_status_t rp_vo_stereo_step(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_es
         if (n_gated > 0) {
             retire_dropped(vo, n);
         }
-        /* the failed matches of the last (re-)initialisations, at the updated pose */
+        /* the failed matches listed before (with their first pixels), then (step 5,
+         * add_landmarks) every other match not yet a landmark, which lists this frame set's
+         * failures anew; both at the updated pose */
         for (uint8_t k = 0; k < vo->cfg.n_pairs; ++k) {
-            if (vo->n_retry[k] > 0 && (imaged & (1u << k))) {
+            if (!(imaged & (1u << k))) {
+                continue;
+            }
+            if (vo->n_retry[k] > 0) {
                 /* ignored: the count is not needed here */
                 (void)triangulate_pair(vo, k, fs, vo->ekf.x, NULL, 1);
+            }
+            if (vo->cfg.add_landmarks) {
+                /* ignored: the count is not needed here */
+                (void)triangulate_pair(vo, k, fs, vo->ekf.x, NULL, 0);
             }
         }
     } else {

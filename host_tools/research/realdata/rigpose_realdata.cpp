@@ -149,6 +149,12 @@ bool apply_override(const std::string &opt, const char *v, rp_pipe_cfg_t *cfg,
     } else if (opt == "--levels") {
         cfg->track.levels = (uint8_t)i;
         fields->push_back("track.levels");
+    } else if (opt == "--add-landmarks") {
+        if (i != 0 && i != 1) {
+            return false;
+        }
+        cfg->stereo.add_landmarks = (uint8_t)i;
+        fields->push_back("stereo.add_landmarks");
     } else if (opt == "--win") {
         cfg->track.win = (uint8_t)i;
         fields->push_back("track.win");
@@ -544,7 +550,7 @@ void usage(FILE *f)
         "settings (over the defaults or FILE): --q-trans Q --q-rot Q --sigma-px S --features N --levels L --win W\n"
         "  --min-dist D --grid X,Y --max-depth M --match-depth MIN,MAX --match-win H\n"
         "  --match-zncc Z --match-subpix N --fb-max PX --min-tracked N --refine 0|1\n"
-        "  --iterations N --gate CHI2 --estimate-offsets 0|1 --offset-sigma S\n"
+        "  --iterations N --gate CHI2 --estimate-offsets 0|1 --offset-sigma S --add-landmarks 0|1\n"
         "  --offset-ms MS (the right camera's clock offset: capture = stamp + MS)\n"
         "  --max-pair-skew S\n");
 }
