@@ -13,8 +13,9 @@
 # COV_RESET flag (neither has a cause on these runs), resident memory growing by 1 % or more
 # after the warm-up (the first fifth of the run's frame sets, told by the size of the pose log
 # at each sample, not by time: a slow start on a loaded machine does not move memory that the
-# early frame sets touch past it), compared with the largest sample of the warm-up's end. Prints the figures; OUT_JSON (optional) receives soak_frames,
-# soak_image_frames, soak_rss_growth_pct (the larger of the two runs), soak_sets_per_s.
+# early frame sets touch past it), compared with the largest sample of the warm-up's end.
+# Prints the figures; OUT_JSON (optional) receives soak_frames, soak_image_frames,
+# soak_rss_growth_pct (the larger of the two runs), soak_sets_per_s.
 set -u
 BUILD=${1:?usage: soak.sh BUILD N_FEAT N_IMG [OUT_JSON]}
 N_FEAT=${2:?N_FEAT}

@@ -149,7 +149,8 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
  * kept on a list (RP_MAX_FEATS_PER_CAM per pair, sorted by id, with the two pixels that failed
  * it and the pose they were seen at) and tried again, with the same checks, at every later
  * frame set's updated pose while both cameras track it; the list is replaced at the next
- * (re-)initialisation. A match that is wrong stays wrong and keeps failing. One that succeeds
+ * (re-)initialisation, and with add_landmarks (step 5) at every frame set, by that frame set's
+ * failures with their pixels then. A match that is wrong stays wrong and keeps failing. One that succeeds
  * is placed at the later pose, whose error it carries, and then takes its first two pixels
  * through its structure EKF at their pose (the gate refuses the wrong one): the right one's ray
  * ties it to the pose the map was anchored at. */
