@@ -5,7 +5,7 @@
 #   make fuzz FUZZ_S=N         every target for N seconds (default 60), one after the other, on its
 #                              growing corpus $(BUILD)/fuzz/corpus/<target> and the seeds; prints
 #                              executions and corpus size per target; a crash, sanitizer report,
-#                              leak or hang (> 10 s) is copied to tests/fuzz/regress/<target>/ and
+#                              leak or hang (> 25 s) is copied to tests/fuzz/regress/<target>/ and
 #                              fails the run
 #   $(BUILD)/fuzz/fuzz_<t>     the targets (clang -fsanitize=fuzzer,address,undefined)
 #   $(BUILD)/fuzz/test_<t>     make test: target <t> once over its seeds and regression inputs
