@@ -1,7 +1,7 @@
 /*
  * test_ekf1pt.c - 1-point RANSAC around the pose EKF's update: gross outliers left out,
  * high-innovation inliers rescued, a group that fits one camera's wrong pose left out, the
- * same input giving the same output, bad input refused.
+ * same input giving the same output, bad input refused; the MSAC cost of a pose.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -259,6 +259,71 @@ static void test_clean_rescue_is_not_redrawn(void **state)
     free(fx);
 }
 
+/* rp_ekf1pt_cost against the sum written out: at the truth with 0.5 px noise every observation
+ * of the fixture is inside the gate (13.8 x 0.25 px^2) or capped; one moved 10 px off adds the
+ * cap whatever its residual, one weighted 0 or with a NaN pixel adds nothing, one behind its
+ * camera adds the cap; the weights scale the residuals. Bad arguments are refused. */
+static void test_cost_is_the_capped_sum(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0);
+    static const double zero[6] = {0};
+    rp_ekf_t ekf;
+    make_ekf(fx, zero, RP_C(0.01), &ekf);
+    rp_real tp[6];
+    for (int i = 0; i < 6; ++i) tp[i] = (rp_real)fx->sr.truth[60u + (unsigned)i];
+    rp_pose_lin_t pt;
+    assert_ok(rp_pose_lin_set(&pt, tp));
+    const uint32_t n = 40;
+    assert_true(fx->n >= n);
+    fx->obs[1].uv[0] += RP_C(10.0);                 /* far outside the gate */
+    fx->obs[2].w = RP_C(0.0);                       /* left out */
+    fx->obs[3].uv[1] = (rp_real)NAN;                /* left out */
+    fx->obs[4].w = RP_C(4.0);                       /* residual counted 4x */
+    rp_real P[3];                                   /* mirrored behind its camera */
+    assert_ok(rp_rig_cam_point(&fx->sr.rig, fx->obs[5].cam, &pt, fx->obs[5].M, P));
+    for (int a = 0; a < 3; ++a) P[a] = -P[a];
+    assert_ok(rp_rig_world_point(&fx->sr.rig, fx->obs[5].cam, &pt, P, fx->obs[5].M));
+    const double cap = 13.8 * 0.25;
+    double want = 0.0;
+    uint32_t want_in = 0, behind = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        const rp_obs_t *o = &fx->obs[i];
+        if (!(o->w > RP_C(0.0)) || !isfinite((double)o->uv[1])) continue;
+        rp_real uv[2];
+        if (rp_rig_project(&fx->sr.rig, o->cam, &pt, o->M, uv, NULL, NULL) != RP_OK) {
+            assert_int_equal(i, 5); /* only the one behind its camera */
+            behind++;
+            want += cap;
+            continue;
+        }
+        const double e2 = (double)o->w * (pow((double)(o->uv[0] - uv[0]), 2) +
+                                          pow((double)(o->uv[1] - uv[1]), 2));
+        want += fmin(e2, cap);
+        want_in += e2 <= cap;
+    }
+    rp_real cost;
+    uint32_t in;
+    assert_ok(rp_ekf1pt_cost(&ekf, &fx->sr.rig, fx->obs, n, tp, &cost, &in));
+    print_message("cost %.4f px^2 (written out %.4f), %u of %u inside the gate\n", (double)cost,
+                  want, in, n);
+    assert_true(fabs((double)cost - want) <= RP_TOL(1e-9, 1e-3) * want);
+    assert_int_equal(in, want_in);
+    assert_int_equal(behind, 1);
+    assert_true(want_in <= n - 4 && want_in >= n - 10); /* the four left out or off are not */
+    assert_ok(rp_ekf1pt_cost(&ekf, &fx->sr.rig, fx->obs, 0, tp, &cost, NULL));
+    assert_true(cost == RP_C(0.0));
+    assert_status(rp_ekf1pt_cost(NULL, &fx->sr.rig, fx->obs, n, tp, &cost, NULL), RP_E_ARG);
+    assert_status(rp_ekf1pt_cost(&ekf, NULL, fx->obs, n, tp, &cost, NULL), RP_E_ARG);
+    assert_status(rp_ekf1pt_cost(&ekf, &fx->sr.rig, NULL, n, tp, &cost, NULL), RP_E_ARG);
+    assert_status(rp_ekf1pt_cost(&ekf, &fx->sr.rig, fx->obs, n, NULL, &cost, NULL), RP_E_ARG);
+    assert_status(rp_ekf1pt_cost(&ekf, &fx->sr.rig, fx->obs, n, tp, NULL, NULL), RP_E_ARG);
+    tp[2] = (rp_real)NAN;
+    assert_status(rp_ekf1pt_cost(&ekf, &fx->sr.rig, fx->obs, n, tp, &cost, NULL), RP_E_ARG);
+    rp_sim_run_free(&fx->sr);
+    free(fx);
+}
+
 static void test_same_seed_same_output(void **state)
 {
     (void)state;
@@ -322,6 +387,7 @@ int main(void)
         cmocka_unit_test(test_clean_rescue_is_not_redrawn),
         cmocka_unit_test(test_same_seed_same_output),
         cmocka_unit_test(test_bad_input_is_refused),
+        cmocka_unit_test(test_cost_is_the_capped_sum),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -164,6 +164,19 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
                              const rp_obs_t *obs, uint32_t n, const rp_ekf1pt_params_t *prm,
                              uint8_t *used, rp_ekf1pt_info_t *info);
 
+/* The MSAC cost of pose p on the n observations (P. H. S. Torr, A. Zisserman, "MLESAC",
+ * CVIU 78, 2000): the sum over observations with w > 0 and finite pixels of
+ * min(w |z - h(p)|^2, gate_chi2 sigma_px^2) with ekf's filter parameters (13.8 for gate_chi2
+ * 0), each observation at its camera's time at ekf's rate and offsets; one that does not
+ * project at p adds the cap. px^2; lower fits better; comparable between poses on the same
+ * observations and weights. Unlike the size of a support, it tells a pose that fits the
+ * inliers to the pixel noise from one that holds them within the gate a pixel off (a moving
+ * object's pose, which the other cameras' features do not rule out; rp_vo_stereo.h).
+ * inliers (may be NULL): how many are under the cap. RP_E_ARG (NULL ekf/rig/p/cost, obs NULL
+ * with n > 0, p not finite). */
+rp_status_t rp_ekf1pt_cost(const rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs,
+                           uint32_t n, const rp_real p[6], rp_real *cost, uint32_t *inliers);
+
 #ifdef __cplusplus
 }
 #endif

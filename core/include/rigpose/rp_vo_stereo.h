@@ -21,7 +21,13 @@
  *     with enough of them, and the pose is re-found from the images: rig RANSAC over every
  *     camera, Lowe's method on its inliers, and the filter restarted there (pose and its
  *     covariance from Lowe's method, velocity from the previous pose over dt); the outliers'
- *     landmarks are dropped (n_refound counts these).
+ *     landmarks are dropped (n_refound counts these). When the gate rejected most of one
+ *     pair, RANSAC's pose is taken if it holds more observations than the update kept, or fits
+ *     all of them better than the update's posterior by more than a pose error at the pixel
+ *     noise explains: MSAC cost (rp_ekf1pt_cost) lower by over chi2(6 dof, 99.9 %) sigma_px^2.
+ *     (A moving object holding most of one pair's features can draw the update along the
+ *     other pair's weak direction, where that pair's features stay inside the gate, a pixel
+ *     off: more of them held, a worse fit.)
  *     With `one_point` the update is 1-point RANSAC (rp_ekf1pt.h) instead of the plain gated
  *     one: hypotheses from single observations through the prior, the low-innovation
  *     consensus updates, the high-innovation inliers are rescued after it; observations left

@@ -114,19 +114,24 @@ static int obs_pose(const rp_ekf_t *e, const rp_real p[6], const rp_obs_t *o, ca
     return cp->have;
 }
 
-/* Support of pose p (each observation at its camera's time at e's rate and offsets): cand[k] = 1
- * for usable k with w |z - h(p)|^2 <= thr2; returns the count, or 0 as soon as it cannot exceed
- * `beat` (n_ok usable in all). */
-static uint32_t support(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_ekf_t *e,
-                        const rp_obs_t *obs, uint32_t n, const rp_real p[6], rp_real thr2,
-                        uint32_t n_ok, uint32_t beat)
+/* Pose p scored over the observations k with ok[k] (ok NULL: every one with obs_ok), each at
+ * its camera's time at e's rate and offsets: cand[k] = 1 (cand may be NULL) for those with
+ * w |z - h(p)|^2 <= thr2; returns their count, or 0 as soon as it cannot exceed `beat` (n_ok
+ * of them in all). *cost (may be NULL): the MSAC cost, the sum of min(w |z - h(p)|^2, thr2),
+ * thr2 for one that does not project (rp_ekf1pt_cost; only when the count ran to the end). */
+static uint32_t score(const rp_rig_t *rig, const rp_ekf_t *e, const rp_obs_t *obs, uint32_t n,
+                      const uint8_t *ok, const rp_real p[6], rp_real thr2, uint32_t n_ok,
+                      uint32_t beat, uint8_t *cand, rp_real *cost)
 {
     campose_t cp = {0};
-    memset(s->cand, 0, n);
+    if (cand) {
+        memset(cand, 0, n);
+    }
     uint32_t c = 0, left = n_ok;
+    rp_real sum = RP_C(0.0);
     for (uint32_t k = 0; k < n; ++k) {
         rp_real uv[2];
-        if (!s->ok[k]) {
+        if (ok ? !ok[k] : !obs_ok(rig, &obs[k])) {
             continue;
         }
         if (c + left <= beat) {
@@ -135,15 +140,55 @@ static uint32_t support(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_ekf_t *e,
         left--;
         if (!obs_pose(e, p, &obs[k], &cp) ||
             rp_rig_project(rig, obs[k].cam, &cp.pl, obs[k].M, uv, NULL, NULL) != RP_OK) {
+            sum += thr2;
             continue;
         }
         const rp_real du = obs[k].uv[0] - uv[0], dv = obs[k].uv[1] - uv[1];
-        if (obs[k].w * (du * du + dv * dv) <= thr2) {
-            s->cand[k] = 1;
+        const rp_real e2 = obs[k].w * (du * du + dv * dv);
+        if (e2 <= thr2) {
+            if (cand) {
+                cand[k] = 1;
+            }
             c++;
+            sum += e2;
+        } else {
+            sum += thr2;
         }
     }
+    if (cost) {
+        *cost = sum;
+    }
     return c;
+}
+
+/* Support of pose p among the usable observations (s->ok, n_ok of them) into s->cand: score() */
+static uint32_t support(rp_ekf1pt_t *s, const rp_rig_t *rig, const rp_ekf_t *e,
+                        const rp_obs_t *obs, uint32_t n, const rp_real p[6], rp_real thr2,
+                        uint32_t n_ok, uint32_t beat)
+{
+    return score(rig, e, obs, n, s->ok, p, thr2, n_ok, beat, s->cand, NULL);
+}
+
+/* The gate's threshold on w |z - h|^2 in units of s2: gate_chi2, or 13.8 when the filter does
+ * not gate */
+static rp_real gate_of(const rp_ekf_t *ekf)
+{
+    return ekf->prm.gate_chi2 > RP_C(0.0) ? ekf->prm.gate_chi2 : RP_C(13.8);
+}
+
+rp_status_t rp_ekf1pt_cost(const rp_ekf_t *ekf, const rp_rig_t *rig, const rp_obs_t *obs,
+                           uint32_t n, const rp_real p[6], rp_real *cost, uint32_t *inliers)
+{
+    if (!ekf || !rig || (n > 0 && !obs) || !p || !cost || !rp_all_finite(p, NP)) {
+        return RP_E_ARG;
+    }
+    const rp_real thr2 = gate_of(ekf) * ekf->prm.sigma_px * ekf->prm.sigma_px;
+    /* n_ok = n, beat 0: never stops early */
+    const uint32_t c = score(rig, ekf, obs, n, NULL, p, thr2, n, 0, NULL, cost);
+    if (inliers) {
+        *inliers = c;
+    }
+    return RP_OK;
 }
 
 /* Draws needed for confidence when a fraction eps of the observations are inliers and a
@@ -437,7 +482,7 @@ rp_status_t rp_ekf1pt_update(rp_ekf1pt_t *s, rp_ekf_t *ekf, const rp_rig_t *rig,
         memset(used, 0, n);
     }
     const rp_real s2 = ekf->prm.sigma_px * ekf->prm.sigma_px;
-    const rp_real gate = ekf->prm.gate_chi2 > RP_C(0.0) ? ekf->prm.gate_chi2 : RP_C(13.8);
+    const rp_real gate = gate_of(ekf);
     const rp_real thr2 = gate * s2;
     rp_real C[36], p0[NP];
     pose_cov(ekf, C);

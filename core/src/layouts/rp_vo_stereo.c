@@ -639,6 +639,9 @@ static rp_status_t start_with_lowe(rp_vo_stereo_t *vo, uint32_t n, rp_real dt)
     return rp_vo_ekf_from_pose(&vo->ekf, &vo->cfg.ekf, p, cov, vo->prev_p, dt);
 }
 
+/* chi-square quantile, 6 degrees of freedom, 99.9 % (predict_update's re-found pose) */
+#define REFIND_CHI2_6 RP_C(22.46)
+
 /* 1 if the last update gated most of some pair's observations (of a pair that offered at least
  * the EKF's minimum). Outlier tracks are independent events: a gate that rejects a whole pair
  * is judging the prior, not the features. */
@@ -733,11 +736,34 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
          * inliers from the prediction with the pose covariance widened by d d^T, d the gap to
          * the re-found pose (so the velocity keeps its correlation with the pose); if that
          * still uses fewer than RANSAC found, the filter restarts at the re-found pose. */
-        rp_real p[6], cov[36];
+        rp_real p[6], cov[36], first_cost = RP_C(0.0), found_cost = RP_C(0.0);
         uint32_t n_inl = 0;
+        const int costed =
+            st == RP_OK &&
+            rp_ekf1pt_cost(&vo->ekf, vo->rig, vo->obs, n, vo->ekf.x, &first_cost, NULL) == RP_OK;
         const rp_status_t sr = robust_pose(vo, n, p, cov, &n_inl);
         vo->refind_inl = sr == RP_OK ? n_inl : 0u;
-        if (sr == RP_OK && n_inl > first_n) {
+        if (sr == RP_OK && costed) {
+            /* the re-found pose's cost on every observation at weight 1 (as they all were
+             * before robust_pose weighted its outliers 0) */
+            for (uint32_t i = 0; i < n; ++i) {
+                vo->obs[i].w = RP_C(1.0);
+            }
+            if (rp_ekf1pt_cost(&vo->ekf, vo->rig, vo->obs, n, p, &found_cost, NULL) != RP_OK) {
+                found_cost = first_cost;
+            }
+            for (uint32_t i = 0; i < n; ++i) {
+                vo->obs[i].w = vo->inl[i] ? RP_C(1.0) : RP_C(0.0);
+            }
+        }
+        /* Re-found if RANSAC holds more observations, or fits them better by more than a
+         * pose error at the pixel noise explains: the first update's posterior lies off the
+         * least-squares pose by its prior's pull, which raises the cost by about
+         * chi2(6 dof) s2 (REFIND_CHI2_6, 99.9 %); a posterior that a coherent group of
+         * outliers (a moving object) drew off costs far more. */
+        const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
+        if (sr == RP_OK &&
+            (n_inl > first_n || (costed && found_cost + REFIND_CHI2_6 * s2 < first_cost))) {
             rp_ekf_info_t retry;
             vo->n_retried++;
             vo->n_refound++;
