@@ -10,7 +10,11 @@
  *     estimate, then processes the current frame with them.
  *  2. At the second frame the pose EKF is started from Lowe's method on all correspondences
  *     (with `ransac`: on the inliers of a rig RANSAC over every camera, rp_ransac.h; the
- *     others are left out and their landmarks dropped).
+ *     others are left out and their landmarks dropped). A pose RANSAC finds (here and when
+ *     it is re-found, step 3) is refined by Lowe's method with Cauchy weights on the inliers'
+ *     own residual scale (their median, at most RANSAC's sigma): RANSAC's gate is set for the
+ *     worst pixel noise assumed, and points of a moving object a pixel or two off inside it
+ *     would otherwise draw the start, which the map keeps.
  *  3. Every later frame: EKF prediction, then the iterated update with the pixels of every
  *     tracked landmark in every camera of the layout (eqs. 1-2). (beyond the paper) If the
  *     update's Mahalanobis gate rejects most of one pair's observations, the prediction was
@@ -188,6 +192,8 @@ typedef struct {
     rp_ransac_t rs;                     /* rig RANSAC's generator and scratch */
     rp_ekf1pt_t op;                     /* 1-point RANSAC's generator and scratch */
     uint8_t inl[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: RANSAC's inliers */
+    rp_real res2[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: squared residuals, px^2 */
+    rp_real sel2[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: the inliers' (selection) */
     uint8_t keep[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];/* scratch: obs[i]'s landmark is kept */
     uint16_t obs_slot[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: obs[i]'s landmark slot
                                                             * (RP_IDMAP_MAX_SLOTS: none) */

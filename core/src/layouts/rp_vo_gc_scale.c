@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "priv/rp_math.h"
+#include "priv/rp_select.h"
 #include "priv/rp_sym3.h"
 #include "priv/rp_vo_gc_scale.h"
 #include "rigpose/rp_rot.h"
@@ -168,41 +169,8 @@ static rp_status_t correct_pose(rp_vo_gc_t *vo)
     return RP_OK;
 }
 
-/* Reorder h[0..n) (and idx with it) so that its want lowest values come first (quickselect). */
-static void select_lowest(uint32_t *h, uint16_t *idx, uint16_t n, uint16_t want)
-{
-    int lo = 0, hi = (int)n - 1;
-    const int k = (int)want - 1;
-    while (lo < hi) {
-        const uint32_t pivot = h[(lo + hi) / 2];
-        int i = lo, j = hi;
-        while (i <= j) {
-            while (h[i] < pivot) {
-                i++;
-            }
-            while (h[j] > pivot) {
-                j--;
-            }
-            if (i <= j) {
-                const uint32_t th = h[i];
-                const uint16_t ti = idx[i];
-                h[i] = h[j];
-                idx[i] = idx[j];
-                h[j] = th;
-                idx[j] = ti;
-                i++;
-                j--;
-            }
-        }
-        if (k <= j) {
-            hi = j;
-        } else if (k >= i) {
-            lo = i;
-        } else {
-            break;
-        }
-    }
-}
+/* select_lowest(h, idx, n, want): priv/rp_select.h */
+RP_DEFINE_SELECT_LOWEST(select_lowest, uint32_t)
 
 /* The adjustment under way is solved: its result into mu, the map and the pose. */
 static void take_adjustment(rp_vo_gc_t *vo)
@@ -287,7 +255,7 @@ void rp_vo_gc_scale_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, int busy)
         }
         const uint16_t want = vo->cfg.ba_per_cam;
         if (nc > want) {
-            select_lowest(vo->kf_hash, vo->kf_feat, nc, want);
+            select_lowest(vo->kf_hash, vo->kf_feat, (int)nc, (int)want);
             nc = want;
         }
         for (uint16_t i = 0; i < nc && m < RP_GCBA_MAX_OBS_KF; ++i) {
