@@ -15,7 +15,9 @@
 #define ROBUST_ROUNDS 10
 #define ROBUST_CAUCHY_C RP_C(2.3849)
 #define ROBUST_CHI2_2_MEDIAN RP_C(1.3863)
-#define ROBUST_STEP RP_C(1e-9)
+#define ROBUST_STEP RP_C(1e-9) /* (float builds: ROBUST_ROUNDS ends it) */
+/* chi-square quantile, 6 degrees of freedom, 99.9 % (predict_update's re-found pose) */
+#define REFIND_CHI2_6 RP_C(22.46)
 #define RANSAC_SEED 0x5EED5u /* any fixed value: the run is a function of its input */
 
 rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
@@ -531,6 +533,14 @@ static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_e
 /* select_lowest_real(h, NULL, n, want): priv/rp_select.h */
 RP_DEFINE_SELECT_LOWEST(select_lowest_real, rp_real)
 
+/* RANSAC's weights: 1 for its inliers (vo->inl), 0 for its outliers. */
+static void inlier_weights(rp_vo_stereo_t *vo, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; ++i) {
+        vo->obs[i].w = vo->inl[i] ? RP_C(1.0) : RP_C(0.0);
+    }
+}
+
 /* The re-found pose p refined on RANSAC's inliers (vo->inl) by iteratively reweighted Lowe's
  * method, Cauchy weights w = 1 / (1 + |r|^2 / (c^2 s^2)) (c = ROBUST_CAUCHY_C: 95 % efficiency
  * on Gaussian residuals), s the inliers' own scale, s^2 = median |r|^2 / ROBUST_CHI2_2_MEDIAN
@@ -593,9 +603,7 @@ static void robust_refine(rp_vo_stereo_t *vo, uint32_t n, const rp_ransac_params
             break;
         }
     }
-    for (uint32_t i = 0; i < n; ++i) {
-        vo->obs[i].w = vo->inl[i] ? RP_C(1.0) : RP_C(0.0);
-    }
+    inlier_weights(vo, n);
 }
 
 /* The pose from the images alone: rig RANSAC over every camera's n observations (rp_ransac.h),
@@ -717,9 +725,6 @@ static rp_status_t start_with_lowe(rp_vo_stereo_t *vo, uint32_t n, rp_real dt)
     return rp_vo_ekf_from_pose(&vo->ekf, &vo->cfg.ekf, p, cov, vo->prev_p, dt);
 }
 
-/* chi-square quantile, 6 degrees of freedom, 99.9 % (predict_update's re-found pose) */
-#define REFIND_CHI2_6 RP_C(22.46)
-
 /* 1 if the last update gated most of some pair's observations (of a pair that offered at least
  * the EKF's minimum). Outlier tracks are independent events: a gate that rejects a whole pair
  * is judging the prior, not the features. */
@@ -830,9 +835,7 @@ static rp_status_t predict_update(rp_vo_stereo_t *vo, uint32_t n, rp_real dt,
             if (rp_ekf1pt_cost(&vo->ekf, vo->rig, vo->obs, n, p, &found_cost, NULL) != RP_OK) {
                 found_cost = first_cost;
             }
-            for (uint32_t i = 0; i < n; ++i) {
-                vo->obs[i].w = vo->inl[i] ? RP_C(1.0) : RP_C(0.0);
-            }
+            inlier_weights(vo, n);
         }
         /* Re-found if RANSAC holds more observations, or fits them better by more than a
          * pose error at the pixel noise explains: the first update's posterior lies off the
