@@ -124,6 +124,8 @@ typedef struct {
     uint8_t pl_ok[RP_GCBA_MAX_KF][RP_MAX_CAMS];
     double X[RP_GCBA_MAX_LM][3];     /* landmarks, m */
     double x0[RP_GCBA_MAX_KF][6];    /* the estimate before a step (restored if it is worse) */
+    double dX[RP_GCBA_MAX_LM][3];    /* the Gauss-Newton step of each landmark (rp_gcba_step) */
+    double alpha;                    /* the share of it being tried (1: a new step) */
     double X0[RP_GCBA_MAX_LM][3];
     uint8_t ok0[RP_GCBA_MAX_LM];
     double Vi[RP_GCBA_MAX_LM][9];    /* inverse of each landmark's 3x3 block */
@@ -166,7 +168,10 @@ rp_status_t rp_gcba_scale(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
 /* The same in pieces, so that a caller can spread one adjustment over several frames:
  * rp_gcba_start (grouping, triangulation), then rp_gcba_step (the first normal equations, then
  * one Gauss-Newton step per call, each about one pass over the observations; a no-op once
- * solved), then rp_gcba_finish (any steps left, and the result). While an adjustment is under
+ * solved), then rp_gcba_finish (any steps left, and the result). A step that raises the robust
+ * cost is tried again at a quarter and a sixteenth of its length, one length per call
+ * (backtracking along the Gauss-Newton direction, which descends the cost), before the
+ * estimate is left where it was. While an adjustment is under
  * way rp_gcba_add_keyframe refuses (RP_E_ARG); rig must stay valid until finish (cfg is copied).
  * Statuses as rp_gcba_scale's; a failed start or step leaves the window idle. */
 rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,

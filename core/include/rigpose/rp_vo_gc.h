@@ -66,7 +66,8 @@
  *     mu (prior 1 +- mscale_sigma) takes it with its variance times ba_var_scale. Refused (counted in
  *     n_ba_rejected): a failed adjustment, one whose RMS residual stays over
  *     RP_VO_GC_BA_MAX_RMS ba.sigma_px, one that took no step (its first Gauss-Newton step
- *     raised the cost, so it ends at the mu it started from and would confirm that mu with its
+ *     raised the cost at every length rp_gcba_step tries, so it ends at the mu it started from
+ *     and would confirm that mu with its
  *     own variance: on real tracks such windows locked mu at its prior), one more than
  *     RP_VO_GC_BA_GATE_SIGMA sigma from the
  *     current mu (after RP_VO_GC_BA_MAX_REFUSED such refusals in a row the current mu is the

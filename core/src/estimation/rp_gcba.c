@@ -481,6 +481,7 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     ba->mu = (double)mu;
     ba->mu_now = (double)mu;
     ba->it = 0;
+    ba->alpha = 1.0;
     memset(&ba->res, 0, sizeof(ba->res));
     const int nk = ba->n_kf;
     ba->res.n_kf = (uint16_t)nk;
@@ -543,6 +544,10 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     return RP_OK;
 }
 
+/* Backtracking (rp_gcba_step): each try shortens the step by this factor; three lengths in all
+ * (1, 1/4, 1/16). */
+#define RP_GCBA_BACKTRACK_DIV 4.0
+
 rp_status_t rp_gcba_step(rp_gcba_t *ba)
 {
     if (!ba || ba->state == RP_GCBA_IDLE) {
@@ -562,28 +567,58 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
         ba->state = RP_GCBA_ITERATING;
         return RP_OK;
     }
-    /* Gauss-Newton (Levenberg-damped), a step kept only if it lowers the robust cost */
-    ba->res.iterations = (uint8_t)++ba->it;
-    for (int i = 0; i < np; ++i) {
-        ba->S[i * np + i] *= 1.0 + 1e-4;
+    /* Gauss-Newton (Levenberg-damped), globalised by backtracking: the step is kept if it
+     * lowers the robust cost, else a shorter one along it is tried at the next call (the
+     * direction descends the cost wherever S is positive definite, so a short enough one
+     * lowers it; on real tracks a window's weakest direction, its scale, can make the full step
+     * overshoot), and when none of the lengths RP_GCBA_BACKTRACK_DIV allows does, the estimate stays where
+     * it was */
+    if (ba->alpha == 1.0) {
+        ba->res.iterations = (uint8_t)++ba->it;
+        for (int i = 0; i < np; ++i) {
+            ba->S[i * np + i] *= 1.0 + 1e-4;
+        }
+        if (rp_la_chol_d(ba->S, np) != RP_OK) {
+            ba->state = RP_GCBA_IDLE;
+            return RP_E_SINGULAR;
+        }
+        (void)rp_la_chol_solve_d(ba->S, np, ba->g, ba->dx); /* S factored, np in range */
+        memcpy(ba->x0, ba->x, sizeof(ba->x0));
+        memcpy(ba->X0, ba->X, sizeof(double) * 3 * n_lm);
+        memcpy(ba->ok0, ba->lm_ok, n_lm);
+        back_substitute(ba, rig, n_lm, nk, cfg);
+        for (int L = 0; L < n_lm; ++L) {
+            for (int a = 0; a < 3; ++a) {
+                ba->dX[L][a] = ba->X[L][a] - ba->X0[L][a];
+            }
+        }
+    } else {
+        memcpy(ba->lm_ok, ba->ok0, n_lm); /* the last try's build may have set some aside */
+        for (int L = 0; L < n_lm; ++L) {
+            for (int a = 0; a < 3; ++a) {
+                ba->X[L][a] = ba->X0[L][a] + ba->alpha * ba->dX[L][a];
+            }
+        }
     }
-    if (rp_la_chol_d(ba->S, np) != RP_OK) {
-        ba->state = RP_GCBA_IDLE;
-        return RP_E_SINGULAR;
-    }
-    (void)rp_la_chol_solve_d(ba->S, np, ba->g, ba->dx); /* S factored, np in range */
-    memcpy(ba->x0, ba->x, sizeof(ba->x0));
-    memcpy(ba->X0, ba->X, sizeof(double) * 3 * n_lm);
-    memcpy(ba->ok0, ba->lm_ok, n_lm);
-    back_substitute(ba, rig, n_lm, nk, cfg);
     for (int k = 1; k < nk; ++k) {
-        pose_plus_d(ba->x[k], &ba->dx[6 * (k - 1)]);
+        double d[6];
+        for (int a = 0; a < 6; ++a) {
+            d[a] = ba->alpha * ba->dx[6 * (k - 1) + a];
+        }
+        memcpy(ba->x[k], ba->x0[k], sizeof(ba->x[k]));
+        pose_plus_d(ba->x[k], d);
     }
     uint16_t n2 = 0;
     double sq2 = 0.0;
     const double c2 = build(ba, rig, n_lm, nk, cfg, &n2, &sq2);
     if (!(c2 <= ba->cost) || n2 < ba->n_obs / 2) {
-        /* worse: back to the previous estimate and its equations, and stop */
+        if (ba->alpha > 1.0 / RP_GCBA_BACKTRACK_DIV / RP_GCBA_BACKTRACK_DIV) {
+            ba->alpha /= RP_GCBA_BACKTRACK_DIV; /* a shorter step at the next call */
+            return RP_OK;
+        }
+        /* worse at every length tried: back to the previous estimate and its equations, and
+         * stop */
+        ba->alpha = 1.0;
         memcpy(ba->x, ba->x0, sizeof(ba->x0));
         memcpy(ba->X, ba->X0, sizeof(double) * 3 * n_lm);
         memcpy(ba->lm_ok, ba->ok0, n_lm);
@@ -591,6 +626,7 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
         ba->state = RP_GCBA_SOLVED;
         return RP_OK;
     }
+    ba->alpha = 1.0;
     const double gain = (ba->cost - c2) / (ba->cost > 0.0 ? ba->cost : 1.0);
     ba->cost = c2;
     ba->n_obs = n2;
