@@ -73,8 +73,9 @@ typedef struct {
 } rp_gcba_kf_t;
 
 typedef struct {
-    uint8_t iterations;  /* Gauss-Newton iterations at most (it stops when the cost falls by
-                          * under 1e-4 of itself), >= 1 */
+    uint8_t iterations;  /* Gauss-Newton tries at most, a shorter try along a step included
+                          * (rp_gcba_step; it stops when the cost falls by under 1e-4 of
+                          * itself), >= 1 */
     uint8_t min_obs;     /* a landmark needs this many keyframes (>= 2) */
     rp_real sigma_px;    /* pixel noise (1-sigma), > 0 */
     rp_real huber_px;    /* Huber threshold on a residual's length, px, > 0 */
@@ -90,7 +91,7 @@ typedef struct {
     uint16_t n_lm;    /* landmarks adjusted */
     uint16_t n_obs;   /* observations used */
     uint16_t n_kf;    /* keyframes */
-    uint8_t iterations; /* Gauss-Newton steps tried */
+    uint8_t iterations; /* Gauss-Newton tries (shorter ones along a step included) */
     rp_real rms0_px;  /* RMS residual per coordinate before and after, px */
     rp_real rms_px;
 } rp_gcba_result_t;
@@ -125,6 +126,12 @@ typedef struct {
     double X[RP_GCBA_MAX_LM][3];     /* landmarks, m */
     double x0[RP_GCBA_MAX_KF][6];    /* the estimate before a step (restored if it is worse) */
     double dX[RP_GCBA_MAX_LM][3];    /* the Gauss-Newton step of each landmark (rp_gcba_step) */
+    double S0[RP_GCBA_NP * RP_GCBA_NP]; /* the equations at the estimate before a step: back */
+    double g0[RP_GCBA_NP];           /*   in place if no length of it lowers the cost */
+    double Vi0[RP_GCBA_MAX_LM][9];
+    double v0[RP_GCBA_MAX_LM][3];
+    double cost0, sq0;
+    uint16_t n_obs0;
     double alpha;                    /* the share of it being tried (1: a new step) */
     double X0[RP_GCBA_MAX_LM][3];
     uint8_t ok0[RP_GCBA_MAX_LM];
@@ -171,7 +178,8 @@ rp_status_t rp_gcba_scale(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
  * solved), then rp_gcba_finish (any steps left, and the result). A step that raises the robust
  * cost is tried again at a quarter and a sixteenth of its length, one length per call
  * (backtracking along the Gauss-Newton direction, which descends the cost), before the
- * estimate is left where it was. While an adjustment is under
+ * estimate is left where it was; every try counts against cfg.iterations, and each call costs
+ * at most one pass over the observations. While an adjustment is under
  * way rp_gcba_add_keyframe refuses (RP_E_ARG); rig must stay valid until finish (cfg is copied).
  * Statuses as rp_gcba_scale's; a failed start or step leaves the window idle. */
 rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,

@@ -544,6 +544,27 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     return RP_OK;
 }
 
+/* The reduced equations (S, g), the landmarks' Vi and v, the cost, squared sum and count of
+ * the estimate before a step: kept (back = 0) or put back (back = 1). */
+static void copy_equations(rp_gcba_t *ba, int np, uint16_t n_lm, int back)
+{
+    double *S = back ? ba->S : ba->S0, *g = back ? ba->g : ba->g0;
+    const double *S_src = back ? ba->S0 : ba->S, *g_src = back ? ba->g0 : ba->g;
+    memcpy(S, S_src, sizeof(double) * (size_t)(np * np));
+    memcpy(g, g_src, sizeof(double) * (size_t)np);
+    memcpy(back ? ba->Vi : ba->Vi0, back ? ba->Vi0 : ba->Vi, sizeof(double) * 9 * n_lm);
+    memcpy(back ? ba->v : ba->v0, back ? ba->v0 : ba->v, sizeof(double) * 3 * n_lm);
+    if (back) {
+        ba->cost = ba->cost0;
+        ba->sq = ba->sq0;
+        ba->n_obs = ba->n_obs0;
+    } else {
+        ba->cost0 = ba->cost;
+        ba->sq0 = ba->sq;
+        ba->n_obs0 = ba->n_obs;
+    }
+}
+
 /* Backtracking (rp_gcba_step): each try shortens the step by this factor; three lengths in all
  * (1, 1/4, 1/16). */
 #define RP_GCBA_BACKTRACK_DIV 4.0
@@ -571,10 +592,11 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
      * lowers the robust cost, else a shorter one along it is tried at the next call (the
      * direction descends the cost wherever S is positive definite, so a short enough one
      * lowers it; on real tracks a window's weakest direction, its scale, can make the full step
-     * overshoot), and when none of the lengths RP_GCBA_BACKTRACK_DIV allows does, the estimate stays where
-     * it was */
+     * overshoot), and when no length RP_GCBA_BACKTRACK_DIV allows does (or the tries are used
+     * up), the estimate stays where it was */
+    ba->res.iterations = (uint8_t)++ba->it;
     if (ba->alpha == 1.0) {
-        ba->res.iterations = (uint8_t)++ba->it;
+        copy_equations(ba, np, n_lm, 0); /* the equations here, to go back to */
         for (int i = 0; i < np; ++i) {
             ba->S[i * np + i] *= 1.0 + 1e-4;
         }
@@ -612,17 +634,19 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
     double sq2 = 0.0;
     const double c2 = build(ba, rig, n_lm, nk, cfg, &n2, &sq2);
     if (!(c2 <= ba->cost) || n2 < ba->n_obs / 2) {
-        if (ba->alpha > 1.0 / RP_GCBA_BACKTRACK_DIV / RP_GCBA_BACKTRACK_DIV) {
+        if (ba->alpha > 1.0 / RP_GCBA_BACKTRACK_DIV / RP_GCBA_BACKTRACK_DIV &&
+            ba->it < cfg->iterations) {
             ba->alpha /= RP_GCBA_BACKTRACK_DIV; /* a shorter step at the next call */
             return RP_OK;
         }
-        /* worse at every length tried: back to the previous estimate and its equations, and
-         * stop */
+        /* worse at every length tried (or no try left): back to the previous estimate and its
+         * equations (as they were built there), and stop */
         ba->alpha = 1.0;
         memcpy(ba->x, ba->x0, sizeof(ba->x0));
         memcpy(ba->X, ba->X0, sizeof(double) * 3 * n_lm);
         memcpy(ba->lm_ok, ba->ok0, n_lm);
-        ba->cost = build(ba, rig, n_lm, nk, cfg, &ba->n_obs, &ba->sq);
+        copy_equations(ba, np, n_lm, 1);
+        prepare_poses(ba, nk);
         ba->state = RP_GCBA_SOLVED;
         return RP_OK;
     }
