@@ -273,6 +273,29 @@ static void test_without_rotation_the_scale_is_not_claimed(void **state)
     simfx_free(fx);
 }
 
+/* A window started twice too large (the map twice the truth's size in map units, started at
+ * mu = 1), noise-free, with gc's two tries (every try counted, rp_gcba_step): the step halves it
+ * and lands near the truth's unit. (A step rescaled as if the pixels were linear in the unit,
+ * s0^2 / (2 s0 - s1) instead of Gauss-Newton's s1, took none here: tried, not kept.) */
+static void test_window_twice_too_large_shrinks_in_two_tries(void **state)
+{
+    (void)state;
+    fixture_t *fx = fixture(0.0, 0);
+    const window_t w = {2.0, 0.0, 60, 0.0, 0};
+    fill(fx, &w, 6);
+    rp_gcba_cfg_t cfg = rp_gcba_default_cfg();
+    cfg.iterations = 2;
+    cfg.sigma_px = (rp_real)0.05;
+    cfg.huber_px = (rp_real)0.2;
+    rp_gcba_result_t r;
+    assert_ok(rp_gcba_scale(&fx->ba, &fx->sim.sr.rig, (rp_real)1.0, &cfg, &r));
+    print_message("gcba start twice too large: mu %.4f (true 2), rms %.3f -> %.4f px, %u tries\n",
+                  (double)r.mu, (double)r.rms0_px, (double)r.rms_px, r.iterations);
+    assert_true(r.iterations <= 2);
+    assert_true(fabs((double)r.mu - 2.0) < 0.1);
+    simfx_free(fx);
+}
+
 static void test_ring_keeps_the_newest_keyframes(void **state)
 {
     (void)state;
@@ -426,6 +449,7 @@ int main(void)
         cmocka_unit_test(test_noisy_window_from_wrong_angles),
         cmocka_unit_test(test_outliers_are_held_by_the_huber_weight),
         cmocka_unit_test(test_without_rotation_the_scale_is_not_claimed),
+        cmocka_unit_test(test_window_twice_too_large_shrinks_in_two_tries),
         cmocka_unit_test(test_ring_keeps_the_newest_keyframes),
         cmocka_unit_test(test_state_and_counts_follow_the_pieces),
         cmocka_unit_test(test_bad_input_gives_clear_status),
