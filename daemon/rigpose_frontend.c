@@ -47,6 +47,7 @@
 #include "rigpose/rp_hal.h"
 #include "rigpose/rp_pipe.h"
 #include "rp_feats.h"
+#include "rp_prefault.h"
 #include "rp_publish.h"
 
 
@@ -432,6 +433,7 @@ int main(int argc, char **argv)
                 rp_pipe_layout_name(g_cfg.pipe.layout), rp_status_str(pst));
         return EXIT_ESTIMATOR;
     }
+    rp_prefault(&g_pipe, sizeof(g_pipe));
     if (parse_cameras(cameras) != 0) {
         usage(stderr);
         return EXIT_USAGE;

@@ -6,7 +6,8 @@
 #include "rp_est.h"
 
 #include <string.h>
-#include <unistd.h>
+
+#include "rp_prefault.h"
 
 unsigned rp_est_threads_for(const rp_config_t *cfg, unsigned online_cores)
 {
@@ -31,21 +32,6 @@ unsigned rp_est_threads_for(const rp_config_t *cfg, unsigned online_cores)
     return n < 1 ? 1u : n > RP_POOL_MAX_THREADS ? RP_POOL_MAX_THREADS : n;
 }
 
-/* Writes every page of n bytes at p with what it holds. The estimator's state is megabytes of
- * tables (most of it static, zero pages the kernel maps on first write) that fill as tracks,
- * landmarks and ids come and go: without this, frame sets long after the start take page
- * faults in the loop (a latency no benchmark of the first minute shows) and the resident set
- * creeps up as new parts of the tables are first written. */
-static void prefault(void *p, size_t n)
-{
-    const long pg = sysconf(_SC_PAGESIZE);
-    const size_t step = pg > 0 ? (size_t)pg : 4096u;
-    volatile unsigned char *c = (volatile unsigned char *)p;
-    for (size_t i = 0; i < n; i += step) {
-        c[i] = c[i];
-    }
-}
-
 rp_status_t rp_est_init(rp_est_t *est, const rp_config_t *cfg)
 {
     if (est == NULL || cfg == NULL) {
@@ -56,7 +42,7 @@ rp_status_t rp_est_init(rp_est_t *est, const rp_config_t *cfg)
     if (st != RP_OK) {
         return st;
     }
-    prefault(&est->pipe, sizeof(est->pipe)); /* before the pool's threads start */
+    rp_prefault(&est->pipe, sizeof(est->pipe)); /* before the pool's threads start */
     for (uint8_t t = 0; t < RP_PIPE_MAX_TRACKERS; ++t) {
         est->trk_pair[t] = -1;
     }
