@@ -66,6 +66,15 @@ static fixture_t *fixture(double noise_px, uint32_t run)
     return simfx_new(sizeof(fixture_t), noise_px, 40, run);
 }
 
+/* The adjustment's settings for noise-free pixels: 0.05 px, Huber at 0.2 px. */
+static rp_gcba_cfg_t noise_free_cfg(void)
+{
+    rp_gcba_cfg_t cfg = rp_gcba_default_cfg();
+    cfg.sigma_px = (rp_real)0.05;
+    cfg.huber_px = (rp_real)0.2;
+    return cfg;
+}
+
 static void test_noise_free_window_finds_the_map_unit(void **state)
 {
     (void)state;
@@ -74,9 +83,7 @@ static void test_noise_free_window_finds_the_map_unit(void **state)
     fixture_t *fx = fixture(0.0, 0);
     const window_t w = {1.15, 0.0, 60, 0.0, 0};
     fill(fx, &w, 6);
-    rp_gcba_cfg_t cfg = rp_gcba_default_cfg();
-    cfg.sigma_px = (rp_real)0.05;
-    cfg.huber_px = (rp_real)0.2;
+    const rp_gcba_cfg_t cfg = noise_free_cfg();
     rp_gcba_result_t r;
     assert_ok(rp_gcba_scale(&fx->ba, &fx->sim.sr.rig, (rp_real)1.0, &cfg, &r));
     print_message("gcba noise-free: mu %.5f (true 1.15) sd %.5f, %u landmarks, %u obs, "
@@ -274,8 +281,8 @@ static void test_without_rotation_the_scale_is_not_claimed(void **state)
 }
 
 /* A window started twice too large (the map twice the truth's size in map units, started at
- * mu = 1), noise-free, with gc's two tries (every try counted, rp_gcba_step): the step halves it
- * and lands near the truth's unit. (A step rescaled as if the pixels were linear in the unit,
+ * mu = 1), noise-free, with gc's two tries (rp_gcba_step counts every try, backtracking ones
+ * too): the step halves it and lands near the truth's unit. (A step rescaled as if the pixels were linear in the unit,
  * s0^2 / (2 s0 - s1) instead of Gauss-Newton's s1, took none here: tried, not kept.) */
 static void test_window_twice_too_large_shrinks_in_two_tries(void **state)
 {
@@ -283,10 +290,8 @@ static void test_window_twice_too_large_shrinks_in_two_tries(void **state)
     fixture_t *fx = fixture(0.0, 0);
     const window_t w = {2.0, 0.0, 60, 0.0, 0};
     fill(fx, &w, 6);
-    rp_gcba_cfg_t cfg = rp_gcba_default_cfg();
+    rp_gcba_cfg_t cfg = noise_free_cfg();
     cfg.iterations = 2;
-    cfg.sigma_px = (rp_real)0.05;
-    cfg.huber_px = (rp_real)0.2;
     rp_gcba_result_t r;
     assert_ok(rp_gcba_scale(&fx->ba, &fx->sim.sr.rig, (rp_real)1.0, &cfg, &r));
     print_message("gcba start twice too large: mu %.4f (true 2), rms %.3f -> %.4f px, %u tries\n",

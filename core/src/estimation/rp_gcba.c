@@ -544,24 +544,28 @@ rp_status_t rp_gcba_start(rp_gcba_t *ba, const rp_rig_t *rig, rp_real mu,
     return RP_OK;
 }
 
-/* The reduced equations (S, g), the landmarks' Vi and v, the cost, squared sum and count of
- * the estimate before a step: kept (back = 0) or put back (back = 1). */
-static void copy_equations(rp_gcba_t *ba, int np, uint16_t n_lm, int back)
+/* The estimate before a step (poses, landmarks and which of them are usable) with the
+ * equations built there (S, g, the landmarks' Vi and v, the cost, squared sum and count):
+ * kept (back = 0), or put back (back = 1) when no length of the step lowers the cost. */
+static void start_state(rp_gcba_t *ba, int np, uint16_t n_lm, int back)
 {
-    double *S = back ? ba->S : ba->S0, *g = back ? ba->g : ba->g0;
-    const double *S_src = back ? ba->S0 : ba->S, *g_src = back ? ba->g0 : ba->g;
-    memcpy(S, S_src, sizeof(double) * (size_t)(np * np));
-    memcpy(g, g_src, sizeof(double) * (size_t)np);
-    memcpy(back ? ba->Vi : ba->Vi0, back ? ba->Vi0 : ba->Vi, sizeof(double) * 9 * n_lm);
-    memcpy(back ? ba->v : ba->v0, back ? ba->v0 : ba->v, sizeof(double) * 3 * n_lm);
-    if (back) {
-        ba->cost = ba->cost0;
-        ba->sq = ba->sq0;
-        ba->n_obs = ba->n_obs0;
-    } else {
-        ba->cost0 = ba->cost;
-        ba->sq0 = ba->sq;
-        ba->n_obs0 = ba->n_obs;
+    const struct {
+        void *now, *kept;
+        size_t n;
+    } part[] = {
+        {ba->x, ba->x0, sizeof(ba->x0)},
+        {ba->X, ba->X0, sizeof(double) * 3 * n_lm},
+        {ba->lm_ok, ba->ok0, n_lm},
+        {ba->S, ba->S0, sizeof(double) * (size_t)(np * np)},
+        {ba->g, ba->g0, sizeof(double) * (size_t)np},
+        {ba->Vi, ba->Vi0, sizeof(double) * 9 * n_lm},
+        {ba->v, ba->v0, sizeof(double) * 3 * n_lm},
+        {&ba->cost, &ba->cost0, sizeof(ba->cost)},
+        {&ba->sq, &ba->sq0, sizeof(ba->sq)},
+        {&ba->n_obs, &ba->n_obs0, sizeof(ba->n_obs)},
+    };
+    for (size_t i = 0; i < sizeof(part) / sizeof(part[0]); ++i) {
+        memcpy(back ? part[i].now : part[i].kept, back ? part[i].kept : part[i].now, part[i].n);
     }
 }
 
@@ -596,7 +600,7 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
      * up), the estimate stays where it was */
     ba->res.iterations = (uint8_t)++ba->it;
     if (ba->alpha == 1.0) {
-        copy_equations(ba, np, n_lm, 0); /* the equations here, to go back to */
+        start_state(ba, np, n_lm, 0); /* S is factored below */
         for (int i = 0; i < np; ++i) {
             ba->S[i * np + i] *= 1.0 + 1e-4;
         }
@@ -605,9 +609,6 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
             return RP_E_SINGULAR;
         }
         (void)rp_la_chol_solve_d(ba->S, np, ba->g, ba->dx); /* S factored, np in range */
-        memcpy(ba->x0, ba->x, sizeof(ba->x0));
-        memcpy(ba->X0, ba->X, sizeof(double) * 3 * n_lm);
-        memcpy(ba->ok0, ba->lm_ok, n_lm);
         back_substitute(ba, rig, n_lm, nk, cfg);
         for (int L = 0; L < n_lm; ++L) {
             for (int a = 0; a < 3; ++a) {
@@ -642,10 +643,7 @@ rp_status_t rp_gcba_step(rp_gcba_t *ba)
         /* worse at every length tried (or no try left): back to the previous estimate and its
          * equations (as they were built there), and stop */
         ba->alpha = 1.0;
-        memcpy(ba->x, ba->x0, sizeof(ba->x0));
-        memcpy(ba->X, ba->X0, sizeof(double) * 3 * n_lm);
-        memcpy(ba->lm_ok, ba->ok0, n_lm);
-        copy_equations(ba, np, n_lm, 1);
+        start_state(ba, np, n_lm, 1);
         prepare_poses(ba, nk);
         ba->state = RP_GCBA_SOLVED;
         return RP_OK;
