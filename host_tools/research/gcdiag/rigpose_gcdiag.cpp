@@ -33,6 +33,8 @@
  *                       [--target N] [--topup-below N] [--min-tracked N]
  *                       [--init-depth M] [--init-sigma M] [--mature-frac F] [--min-mature N]
  *                       [--mscale-sigma S]  (gc's metric scale step, rp_vo_gc.h step 6; 0: off)
+ *                       [--ba-var-scale F]  (the factor on a window's mu variance before it is
+ *                       fused; 1e12: mu stays at its start, the windows still correct the map)
  *                       [--surface-sim MIX [--thick T]] [--sim KEEP [--epi]] [render options]
  * --cache DIR keeps the rendered images as PNG files in DIR (read back when present).
  */
@@ -62,6 +64,7 @@ double g_init_sigma = 0.0; /* --init-sigma: gc's depth prior sigma (0: 0.15 m) *
 double g_mature = -1.0;    /* --mature-frac (< 0: default) */
 int g_min_mature = -1;     /* --min-mature (< 0: default) */
 double g_mscale = -1.0;    /* --mscale-sigma: gc's metric scale step prior (0: off; < 0: default) */
+double g_ba_var = -1.0;    /* --ba-var-scale: a window's mu variance factor (< 0: default) */
 bool g_epi = false;        /* --epi: print the generalised epipolar scale check in --sim */
 
 void apply_gc_opts(rp_vo_gc_cfg_t *c)
@@ -80,6 +83,9 @@ void apply_gc_opts(rp_vo_gc_cfg_t *c)
     }
     if (g_mscale >= 0.0) {
         c->mscale_sigma = (rp_real)g_mscale;
+    }
+    if (g_ba_var > 0.0) {
+        c->ba_var_scale = (rp_real)g_ba_var;
     }
 } /* --init-depth: gc's assumed depth in --sim (0: the shell's mid) */
 
@@ -431,7 +437,7 @@ void usage(FILE *out)
                  "usage: rigpose-gcdiag [--runs N] [--first-run R] [--iid-px S] [--cache DIR]\n"
                  "         [--verbose] [--target N] [--topup-below N] [--min-tracked N]\n"
                  "         [--init-depth M] [--init-sigma M] [--mature-frac F] [--min-mature N]\n"
-                 "         [--mscale-sigma S (gc's metric scale step; 0: off)]\n"
+                 "         [--mscale-sigma S (gc's metric scale step; 0: off)] [--ba-var-scale F]\n"
                  "         [--surface-sim MIX [--thick T]] [--sim KEEP [--epi]] [render options]\n"
                  "gc from rendered pixels against gc fed the renderer's true projections with the\n"
                  "tracker's ids (default), or feature-level gc on the rendered surface\n"
@@ -489,6 +495,9 @@ int main(int argc, char **argv)
             ++i;
         } else if (!std::strcmp(a, "--mscale-sigma") && v) {
             g_mscale = std::strtod(v, nullptr);
+            ++i;
+        } else if (!std::strcmp(a, "--ba-var-scale") && v) {
+            g_ba_var = std::strtod(v, nullptr);
             ++i;
         } else if (!std::strcmp(a, "--init-depth") && v) {
             g_init_depth = std::strtod(v, nullptr);
