@@ -101,8 +101,9 @@ typedef struct {
     uint8_t rc_cams[RP_RC_MAX_CAMS]; /* rc: its cameras, rc_cams[0] the reference (cam1) */
     uint8_t rc_n;             /* rc: how many of rc_cams, 2..RP_RC_MAX_CAMS (default 4) */
     rp_rc_params_t rc;        /* rc: fusion parameters */
-    uint8_t dormant_retired;  /* stereo layouts: 1 (default): after each estimate the tracks the
-                               * estimator retired go dormant in their pair's first tracker
+    uint8_t dormant_retired;  /* stereo layouts and gc: 1 (default): after each estimate the
+                               * tracks the estimator retired go dormant in their pair's first
+                               * tracker (gc: their camera's)
                                * (rp_track_set_dormant), so that they no longer fill its
                                * budget; 0: they count as any track. Front ends run as separate
                                * processes (rigpose-frontend) cannot see the estimator's retired

@@ -37,6 +37,14 @@
  *  3. After the pose update each observed landmark's structure EKF takes its pixel at the
  *     updated pose, with the pose's projected uncertainty added to the pixel noise (the pose is
  *     taken as known, but not as exact).
+ *  3b. (drop_odds > 0) Each observed landmark is judged in or out by this frame set's
+ *     updates: one offered to the pose update by whether the update took it, a young one by
+ *     whether its structure EKF's gate took its pixel. The drop test (rp_droptest.h, as
+ *     stereo's) drops a landmark whose observations keep being left out (a moving object, a
+ *     track slipped onto another surface), and its track is retired: not made a landmark
+ *     again while its camera tracks it, so that the camera, short of landmarks, is topped up
+ *     from the rest of its view. Judged only when the pose update took in most of what it
+ *     was offered (else the prediction, not the tracks, is in doubt).
  *  4. Features come and go: a landmark whose camera delivered an image without it is dropped
  *     (its track was lost); a camera that delivered no image at all keeps its landmarks. When a
  *     camera holds fewer than min_tracked landmarks, it is topped up from the *current* frame
@@ -87,6 +95,7 @@
 #ifndef RP_VO_GC_H
 #define RP_VO_GC_H
 
+#include "rp_droptest.h"
 #include "rp_ekf.h"
 #include "rp_ekf1pt.h"
 #include "rp_frame.h"
@@ -146,6 +155,9 @@ typedef struct {
                                    * 0: the plain gated update */
     uint8_t ransac;               /* 1: the pose re-found by rig RANSAC when most observations
                                    * are left out (step 2); 0: never */
+    rp_real drop_odds;            /* step 3b: a landmark whose observations the updates keep
+                                   * leaving out is dropped at these odds (rp_droptest.h) and
+                                   * its track retired; 0: off (every landmark kept) */
 } rp_vo_gc_cfg_t;
 
 /* Step 6's fixed rules (rp_vo_gc_scale.c). */
@@ -206,7 +218,17 @@ typedef struct {
     rp_ekf1pt_t op;                        /* 1-point RANSAC's generator and scratch */
     rp_ransac_t rs;                        /* rig RANSAC's generator and scratch */
     uint32_t n_refound;                    /* updates redone at a pose re-found by rig RANSAC */
+    rp_droptest_t drop;                    /* step 3b's test, by slot of lm */
+    uint16_t obs_slot[RP_VO_GC_MAX_OBS];   /* scratch: obs[i]'s landmark slot */
+    uint8_t judged_in[RP_VO_GC_MAX_OBS];   /* scratch: obs[i] taken in (pose or structure) */
+    uint8_t keep[RP_VO_GC_MAX_OBS];        /* scratch: obs[i]'s landmark is kept */
+    rp_idmap_t retired;                    /* step 3b's retired tracks (group: camera) */
+    uint32_t n_dropped;                    /* landmarks step 3b dropped since the start */
 } rp_vo_gc_t;
+
+/* *is_retired = 1 if track id is one of step 3b's retired tracks (rp_vo_gc.h), else 0.
+ * RP_E_ARG (NULL). */
+rp_status_t rp_vo_gc_is_retired(const rp_vo_gc_t *vo, uint32_t id, uint8_t *is_retired);
 
 /* Set up the estimator for rig (which must outlive it) with cfg. The world is cam1's frame at
  * the first frame set. RP_E_ARG (bad config: no camera, index out of range or repeated,

@@ -50,6 +50,7 @@
 #define RP_VO_STEREO_H
 
 #include "rp_ekf.h"
+#include "rp_droptest.h"
 #include "rp_ekf1pt.h"
 #include "rp_frame.h"
 #include "rp_lmtab.h"
@@ -133,24 +134,23 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void);
  * track: its place in the image stays taken, so the detector does not put a new feature on the
  * same spot of the object (dropping them instead was measured worse: the object's freed area
  * filled with new tracks that the next re-initialisation took in). */
-/* Dropping a landmark (cfg.drop_odds). An update leaves out an observation either because its
+/* Dropping a landmark (cfg.drop_odds; rp_droptest.h, shared with gc). An update leaves out an observation either because its
  * landmark's track went wrong (a moving object, a track slipped onto another surface: its
- * observations then stay out, but for the chance RP_VO_DROP_PASS that one falls inside the
+ * observations then stay out, but for the chance RP_DROP_PASS that one falls inside the
  * consensus) or because a sound track's pixel read wrong once, at the rate eps at which this
  * frame set's update left out the observations of landmarks that the previous update took in
  * (Krichevsky-Trofimov estimate, at most 1/2: the consensus is a majority; from all
  * observations while fewer than ekf.min_features have such a past). Page's CUSUM test of
  * "wrong" against "sound" on each landmark's log-likelihood ratio,
  *   S = max(0, S + sum over its observations in this frame set of
- *                  log((1 - RP_VO_DROP_PASS) / eps) if left out,
- *                  log(RP_VO_DROP_PASS / (1 - eps)) if taken in),
+ *                  log((1 - RP_DROP_PASS) / eps) if left out,
+ *                  log(RP_DROP_PASS / (1 - eps)) if taken in),
  * drops it when S > log(cfg.drop_odds). On a clean frame set (eps a few %) a landmark left out
  * in both cameras of its pair goes at once, as a moving object's do (its landmarks are left
  * out from their first update on, so they do not raise eps); a landmark left out in one camera
  * only goes after several frame sets of it; under pixel outliers drawn anew every frame (eps
  * 30 %) it takes three frame sets in a row of both cameras left out, which a sound track meets
  * rarely (eps^6). */
-#define RP_VO_DROP_PASS RP_C(0.1)
 
 /* Failed matches tried again (cfg.retry_triangulation). A (re-)initialisation triangulates
  * every match of its pair; one whose two pixels fail its checks at that frame set (a pixel
@@ -197,10 +197,7 @@ typedef struct {
     uint8_t keep[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM];/* scratch: obs[i]'s landmark is kept */
     uint16_t obs_slot[RP_MAX_CAMS * RP_MAX_FEATS_PER_CAM]; /* scratch: obs[i]'s landmark slot
                                                             * (RP_IDMAP_MAX_SLOTS: none) */
-    rp_real drop_s[RP_IDMAP_MAX_SLOTS];  /* per landmark slot: the drop test's S (above) */
-    rp_real drop_sum[RP_IDMAP_MAX_SLOTS];/* scratch of the drop test */
-    uint8_t was_in[RP_IDMAP_MAX_SLOTS];  /* per landmark slot: the last update took it in */
-    uint8_t seen[RP_IDMAP_MAX_SLOTS];    /* scratch of the drop test */
+    rp_droptest_t drop;                 /* the drop test's state per landmark slot (above) */
     rp_vo_retry_t retry[RP_MAX_PAIRS][RP_MAX_FEATS_PER_CAM]; /* failed matches (above), by id */
     uint16_t n_retry[RP_MAX_PAIRS];
     rp_pose_lin_t retry_pl[RP_MAX_PAIRS]; /* the pose of their pixels (camera a's time) */

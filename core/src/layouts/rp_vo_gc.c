@@ -37,6 +37,7 @@ rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void)
     c.ba.iterations = 2;
     c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
     c.ransac = 1;
+    c.drop_odds = RP_DROP_ODDS; /* step 3b (rp_vo_gc.h) */
     return c;
 }
 
@@ -47,6 +48,8 @@ static rp_status_t lm_insert(rp_vo_gc_t *vo, uint32_t id, uint8_t cam, const rp_
     uint16_t slot;
     rp_status_t st = rp_lmtab_insert(&vo->lm, id, cam, pt, &slot);
     if (st == RP_OK) {
+        /* ignored: slot is the table's own */
+        (void)rp_droptest_reset_slot(&vo->drop, slot);
         vo->mature[slot] = 0;
         vo->taken[slot] = vo->frame + 1u; /* the pixel that placed it */
     }
@@ -95,7 +98,8 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
         !(cfg->init_depth_sigma_m > RP_C(0.0)) || !rp_finite(cfg->init_depth_sigma_m) ||
         !(cfg->mature_frac >= RP_C(0.0)) || !rp_finite(cfg->mature_frac) ||
         !(cfg->default_dt_s > RP_C(0.0)) || !rp_finite(cfg->default_dt_s) ||
-        cfg->one_point > 1 || cfg->ransac > 1) {
+        cfg->one_point > 1 || cfg->ransac > 1 || !rp_finite(cfg->drop_odds) ||
+        !(cfg->drop_odds == RP_C(0.0) || cfg->drop_odds > RP_C(1.0))) {
         return RP_E_ARG;
     }
     uint8_t in_use[RP_MAX_CAMS] = {0};
@@ -121,6 +125,9 @@ rp_status_t rp_vo_gc_init(rp_vo_gc_t *vo, const rp_rig_t *rig, const rp_vo_gc_cf
     }
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
+    /* ignored: only NULL arguments fail */
+    (void)rp_idmap_clear(&vo->retired);
+    vo->n_dropped = 0;
     (void)rp_ekf1pt_seed(&vo->op, RANSAC_SEED);
     /* ignored: only NULL arguments fail */
     (void)rp_ransac_seed(&vo->rs, RANSAC_SEED);
@@ -217,8 +224,9 @@ static uint16_t top_up_camera(rp_vo_gc_t *vo, const rp_frameset_t *fs, uint8_t c
         const rp_feat_t *ft = &fs->f[cam][f];
         uint16_t slot;
         if (ft->id == RP_VO_GC_EMPTY_ID || !rp_all_finite(ft->uv, 2) ||
-            rp_lmtab_find(&vo->lm, ft->id, &slot) == RP_OK) {
-            continue;
+            rp_lmtab_find(&vo->lm, ft->id, &slot) == RP_OK ||
+            (vo->retired.n > 0 && rp_idmap_find(&vo->retired, ft->id, &slot) == RP_OK)) {
+            continue; /* a landmark already, or a retired track (step 3b) */
         }
         rp_point3_t pt;
         if (init_feature(vo, cam, ft->uv, pl, Ppp, &pt) != RP_OK) {
@@ -362,6 +370,8 @@ static rp_status_t first_frame(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estim
     (void)rp_pose_lin_set(&pl, zero);
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_clear(&vo->lm);
+    /* ignored: only NULL arguments fail */
+    (void)rp_idmap_clear(&vo->retired);
     /* ignored: cannot fail: the parameters were checked at init */
     (void)rp_vo_ekf_at_origin(&vo->ekf, &vo->cfg.ekf);
     rp_vo_gc_scale_reset(vo);
@@ -537,6 +547,82 @@ static rp_status_t pose_update(rp_vo_gc_t *vo, uint32_t m, uint32_t n_mature,
     return st;
 }
 
+rp_status_t rp_vo_gc_is_retired(const rp_vo_gc_t *vo, uint32_t id, uint8_t *is_retired)
+{
+    if (vo == NULL || is_retired == NULL) {
+        return RP_E_ARG;
+    }
+    uint16_t slot;
+    *is_retired = (uint8_t)(id != RP_VO_GC_EMPTY_ID && vo->retired.n > 0 &&
+                            rp_idmap_find(&vo->retired, id, &slot) == RP_OK);
+    return RP_OK;
+}
+
+/* Step 3b (rp_vo_gc.h): the drop test on this frame set's n observations, each judged in by
+ * the pose update (offered ones) or by its structure gate (young ones); the landmarks it drops
+ * leave the map and their tracks are retired. had_image: the cameras whose landmarks were
+ * all observed (every one of theirs is among the n). */
+static void drop_tracks(rp_vo_gc_t *vo, uint32_t n, const uint8_t had_image[RP_MAX_CAMS])
+{
+    uint32_t mask = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        uint16_t slot;
+        const int ok = rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK;
+        vo->obs_slot[i] = ok ? slot : (uint16_t)RP_IDMAP_MAX_SLOTS;
+        vo->judged_in[i] = (uint8_t)(vo->in_pose[i] ? vo->used[i]
+                                                    : ok && vo->taken[slot] == vo->frame + 1u);
+    }
+    /* ignored: the arrays are the estimator's own and drop_odds was checked at init */
+    (void)rp_droptest_run(&vo->drop, vo->obs_slot, vo->judged_in, n, vo->cfg.ekf.min_features,
+                          vo->cfg.drop_odds, vo->keep);
+    uint32_t n_drop = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        vo->keep[i] = (uint8_t)(vo->keep[i] || vo->obs_slot[i] >= RP_IDMAP_MAX_SLOTS);
+        if (!vo->keep[i]) {
+            uint16_t rs;
+            /* a full list forgets nothing it holds: the track may become a landmark again */
+            (void)rp_idmap_insert(&vo->retired, vo->obs_id[i], vo->obs[i].cam, &rs);
+            n_drop++;
+        }
+    }
+    if (n_drop == 0) {
+        return;
+    }
+    for (uint32_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        mask |= had_image[cam] ? (1u << cam) : 0u;
+    }
+    /* ignored: only NULL arguments fail */
+    (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->keep, n);
+    (void)rp_lmtab_drop_unmarked(&vo->lm, mask, NULL);
+    vo->n_dropped += n_drop;
+}
+
+/* Step 3b's retired tracks that their camera no longer tracks leave the list (a camera without
+ * an image this frame set keeps its). */
+static void prune_retired(rp_vo_gc_t *vo, const rp_frameset_t *fs,
+                          const uint8_t had_image[RP_MAX_CAMS])
+{
+    if (vo->retired.n == 0) {
+        return;
+    }
+    uint32_t mask = 0;
+    for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
+        if (!had_image[cam]) {
+            continue;
+        }
+        mask |= 1u << cam;
+        for (uint16_t f = 0; f < fs->n[cam]; ++f) {
+            uint16_t slot;
+            if (rp_idmap_find(&vo->retired, fs->f[cam][f].id, &slot) == RP_OK) {
+                /* ignored: slot is the map's own */
+                (void)rp_idmap_mark(&vo->retired, slot);
+            }
+        }
+    }
+    /* ignored: only NULL arguments fail */
+    (void)rp_idmap_drop_unmarked(&vo->retired, mask, NULL);
+}
+
 rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)
 {
     if (!vo || !est) {
@@ -568,8 +654,10 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
     for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
         est->n_used[cam] = 0;
     }
+    uint32_t m_offered = 0, n_in = 0;
     if (st == RP_OK) {
         const uint32_t m = select_for_pose(vo, n, &n_mature);
+        m_offered = m;
         rp_ekf_info_t info;
         st = pose_update(vo, m, n_mature, &info, &refind_ran);
         n_gated = info.n_gated;
@@ -586,6 +674,7 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
                     vo->used[i] = vo->pused[k++];
                     if (vo->used[i]) {
                         est->n_used[vo->obs[i].cam]++;
+                        n_in++;
                     }
                 }
             }
@@ -598,6 +687,9 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
             flags |= RP_EST_GATED;
         }
         refine_structure(vo, n);
+        if (vo->cfg.drop_odds > RP_C(0.0) && 2u * n_in > m_offered) {
+            drop_tracks(vo, n, had_image);
+        }
         rp_vo_gc_scale_step(vo, fs, refind_ran);
         /* the scale is weak while the landmarks have not converged; without step 6 always
          * (the assumed depth's); with it while the map's unit is known less well than the
@@ -612,6 +704,7 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
         flags |= RP_EST_LOST;
     }
 
+    prune_retired(vo, fs, had_image);
     /* Top up cameras under their threshold from this frame, at the (updated) pose at each
      * camera's capture time. */
     rp_pose_lin_t pl;

@@ -37,7 +37,7 @@ rp_vo_stereo_cfg_t rp_vo_stereo_default_cfg(void)
     c.refine_structure = 1;
     c.ransac = 1;
     c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
-    c.drop_odds = RP_C(100.0); /* rp_vo_stereo.h, "Dropping a landmark" */
+    c.drop_odds = RP_DROP_ODDS; /* rp_vo_stereo.h, "Dropping a landmark" */
     c.retry_triangulation = 1;
     c.retire_outliers = 1; /* rp_vo_stereo.h: a track that lied once is not believed again */
     c.add_landmarks = 1;   /* rp_vo_stereo.h, step 5 */
@@ -384,9 +384,8 @@ static uint16_t triangulate_pair(rp_vo_stereo_t *vo, uint8_t k, const rp_framese
             break; /* table full: keep what we have */
         }
         n_failed--;
-        vo->drop_s[slot] = RP_C(0.0);
-        vo->was_in[slot] = 0;
-        vo->seen[slot] = 0;
+        /* ignored: slot is the table's own */
+        (void)rp_droptest_reset_slot(&vo->drop, slot);
         added++;
     }
     if (!cfg->retry_triangulation) {
@@ -442,56 +441,19 @@ static void fill_estimate(const rp_vo_stereo_t *vo, const rp_frameset_t *fs, uin
 /* ---- the step ---------------------------------------------------------------------------- */
 
 /* vo->keep[i] = 1 for an observation whose landmark is kept: the drop test of rp_vo_stereo.h
- * ("Dropping a landmark") on this frame set's n observations (vo->used: taken into the update)
- * has not fired for it. */
+ * ("Dropping a landmark", rp_droptest.h) on this frame set's n observations (vo->used: taken
+ * into the update) has not fired for it. */
 static void drop_test(rp_vo_stereo_t *vo, uint32_t n)
 {
-    uint32_t n_was = 0, n_was_out = 0, n_out = 0;
     for (uint32_t i = 0; i < n; ++i) {
         uint16_t slot;
         vo->obs_slot[i] = rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK
                               ? slot
                               : (uint16_t)RP_IDMAP_MAX_SLOTS;
-        n_out += !vo->used[i];
-        if (vo->obs_slot[i] < RP_IDMAP_MAX_SLOTS && vo->was_in[slot]) {
-            n_was++;
-            n_was_out += !vo->used[i];
-        }
     }
-    /* eps: the share left out of the observations whose landmark the previous update took in
-     * (Krichevsky-Trofimov: never 0); all observations while fewer than the filter's minimum
-     * have a past */
-    const int past = n_was >= vo->cfg.ekf.min_features;
-    rp_real eps = ((rp_real)(past ? n_was_out : n_out) + RP_C(0.5)) /
-                  ((rp_real)(past ? n_was : n) + RP_C(1.0));
-    eps = eps < RP_C(0.5) ? eps : RP_C(0.5);
-    const rp_real l_out = rp_log((RP_C(1.0) - RP_VO_DROP_PASS) / eps);
-    const rp_real l_in = rp_log(RP_VO_DROP_PASS / (RP_C(1.0) - eps));
-    const rp_real h = rp_log(vo->cfg.drop_odds);
-    for (uint32_t i = 0; i < n; ++i) { /* this frame set's sum per landmark; seen: 1 started, */
-        const uint16_t slot = vo->obs_slot[i]; /* 2 and taken in */
-        if (slot < RP_IDMAP_MAX_SLOTS) {
-            if (!vo->seen[slot]) {
-                vo->drop_sum[slot] = vo->drop_s[slot];
-                vo->seen[slot] = 1;
-            }
-            vo->drop_sum[slot] += vo->used[i] ? l_in : l_out;
-            vo->seen[slot] = (uint8_t)(vo->used[i] ? 2 : vo->seen[slot]);
-        }
-    }
-    for (uint32_t i = 0; i < n; ++i) {
-        vo->keep[i] = vo->used[i];
-        const uint16_t slot = vo->obs_slot[i];
-        if (slot >= RP_IDMAP_MAX_SLOTS) {
-            continue;
-        }
-        if (vo->seen[slot]) { /* its first observation: the new S */
-            vo->drop_s[slot] = vo->drop_sum[slot] > RP_C(0.0) ? vo->drop_sum[slot] : RP_C(0.0);
-            vo->was_in[slot] = (uint8_t)(vo->seen[slot] == 2);
-            vo->seen[slot] = 0;
-        }
-        vo->keep[i] = (uint8_t)(vo->drop_s[slot] <= h);
-    }
+    /* ignored: the arrays are the estimator's own and drop_odds was checked at init */
+    (void)rp_droptest_run(&vo->drop, vo->obs_slot, vo->used, n, vo->cfg.ekf.min_features,
+                          vo->cfg.drop_odds, vo->keep);
 }
 
 static rp_status_t first_frame(rp_vo_stereo_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)

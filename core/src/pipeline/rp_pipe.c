@@ -385,6 +385,24 @@ static rp_status_t run_estimator(rp_pipe_t *pipe, rp_estimate_t *est)
  * stays dormant until it is lost, also when the retired list, full, forgets it. */
 static void retired_dormant(rp_pipe_t *pipe)
 {
+    if (pipe->cfg.layout == RP_PIPE_GC) {
+        /* gc: every camera's own tracker, its step 3b's retired tracks (rp_vo_gc.h) */
+        for (uint8_t t = 0; t < pipe->n_trk; ++t) {
+            rp_tracker_t *T = &pipe->trk[t];
+            uint16_t m = 0;
+            for (uint16_t i = 0; i < T->n; ++i) {
+                uint8_t r = 0;
+                /* ignored: cannot fail: the pipeline's own estimator */
+                (void)rp_vo_gc_is_retired(&pipe->est.gc, T->id[i], &r);
+                if (r && !T->dormant[i]) {
+                    pipe->pm[0].drop_ids[m++] = T->id[i]; /* pair 0's scratch: gc has none */
+                }
+            }
+            /* ignored: cannot fail: the pipeline's own tracker */
+            (void)rp_track_set_dormant(T, pipe->pm[0].drop_ids, m, NULL);
+        }
+        return;
+    }
     for (uint8_t k = 0; k < pipe->cfg.stereo.n_pairs; ++k) {
         rp_tracker_t *A = &pipe->trk[pipe->cam_trk[pipe->pair[k].a]];
         uint16_t m = 0;
@@ -586,7 +604,8 @@ rp_status_t rp_pipe_estimate(rp_pipe_t *pipe, rp_estimate_t *est)
      * to utime (the covariance grows, the prediction is bounded: rp_ekf_predict) and reports
      * LOST with nothing used, as for blank images. */
     const rp_status_t st = run_estimator(pipe, est);
-    if (is_stereo(pipe->cfg.layout) && pipe->cfg.dormant_retired) {
+    if ((is_stereo(pipe->cfg.layout) || pipe->cfg.layout == RP_PIPE_GC) &&
+        pipe->cfg.dormant_retired) {
         retired_dormant(pipe);
     }
     if (lacking > 0) {
