@@ -35,14 +35,15 @@ with open(csv, "w") as f:
 y = open(os.path.join(src, "rig.yaml")).read()
 y = y.replace("realtime: false", "realtime: live\n  timeout_ms: 1000")
 y = y.replace("replay_index: frames.csv", "replay_index: " + csv)
+# front ends in their own processes cannot see the estimator's retired tracks (stereo's and
+# gc's; config/README.md, dormant_retired): the in-process daemon does as they do
 if method == "gc":
-    y, n = re.subn(r"method: stereo4\n  pairs: .*\n", "method: gc\n  cams: [cam1, cam2, cam3, cam4]\n", y)
+    y, n = re.subn(r"method: stereo4\n  pairs: .*\n",
+                   "method: gc\n  cams: [cam1, cam2, cam3, cam4]\n  dormant_retired: false\n", y)
     assert n == 1, "rig.yaml: no stereo4 estimator to replace"
     y, n = re.subn(r"  - name: cam[13]b\n(    .*\n)*", "", y)
     assert n == 2, "rig.yaml: cam1b and cam3b not found"
 else:
-    # front ends in their own processes cannot see the estimator's retired tracks
-    # (config/README.md, dormant_retired): the in-process daemon does as they do
     y, n = re.subn(r"(method: stereo4\n  pairs: .*\n)", r"\1  dormant_retired: false\n", y)
     assert n == 1, "rig.yaml: no stereo4 estimator"
 y += "\nlcm: {features_channel: FE_%s_CAM, pose_channel: POSE_%s_%s, status_channel: STATUS_%s_%s}\n" % (

@@ -929,9 +929,7 @@ static int setting(const char *key, const rp_pipe_cfg_t *p, double v[2])
     else if (IS("one_point")) {
         v[0] = st ? p->stereo.one_point : gc ? p->gc.one_point : p->mono.one_point;
     }
-    else if (IS("drop_odds") && (st || gc)) {
-        v[0] = (double)(st ? p->stereo.drop_odds : p->gc.drop_odds);
-    }
+    else if (IS("drop_odds") && st) v[0] = (double)p->stereo.drop_odds;
     else if (IS("retry_triangulation") && st) v[0] = p->stereo.retry_triangulation;
     else if (IS("retire_outliers") && st) v[0] = p->stereo.retire_outliers;
     else if (IS("add_landmarks") && st) v[0] = p->stereo.add_landmarks;

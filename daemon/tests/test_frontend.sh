@@ -16,7 +16,7 @@
 #      on every set from the other three cameras; restarted, it rejoins: camera 2 ok again on the
 #      status channel, and poses use its features again;
 #   D. stereo4 (the render's own method): two front ends, one per stereo pair (--cameras 0,4 and
-#      cam3,cam3b), give the in-process poses too (both configurations with dormant_retired
+#      cam3,cam3b), give the in-process poses too (every configuration here with dormant_retired
 #      false: split front ends cannot see the estimator's retired tracks, config/README.md), FEAT_MATCHED marking exactly the ids the pair
 #      partner's image of the same time has; a front end given half a pair is refused.
 # Prints the distributed run's latency (frame -> pose, daemon --stats-json) for the record.

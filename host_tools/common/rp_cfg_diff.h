@@ -77,6 +77,7 @@
     X(gc.ba.iterations, RP_CD_GC, U) X(gc.ba.min_obs, RP_CD_GC, U)                               \
     X(gc.ba.sigma_px, RP_CD_GC, R) X(gc.ba.huber_px, RP_CD_GC, R)                                \
     X(gc.ba.min_angle, RP_CD_GC, R) X(gc.one_point, RP_CD_GC, U) X(gc.ransac, RP_CD_GC, U)       \
+    X(gc.drop_odds, RP_CD_GC, R)                                                                  \
     X(mono.cam, RP_CD_CAMK, U) RP_CD_EKF_FIELDS(X, mono.ekf, RP_CD_MONO)                         \
     X(mono.min_tracked, RP_CD_MONO, U) X(mono.init_depth_m, RP_CD_MONO, R)                       \
     X(mono.init_depth_sigma_m, RP_CD_MONO, R) X(mono.default_dt_s, RP_CD_MONO, R)                \

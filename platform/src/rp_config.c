@@ -870,7 +870,7 @@ static const est_key_t est_keys[] = {
     {"refine_structure", K_BOOL, 0, 1, 0, 1, {F(stereo.refine_structure)}},
     {"ransac", K_BOOL, 0, 1, 0, ALL3(ransac)},
     {"one_point", K_BOOL, 0, 1, 0, ALL3(one_point)},
-    {"drop_odds", K_REAL, 1.0, 1e12, 1, 2, {F(stereo.drop_odds), F(gc.drop_odds)}},
+    {"drop_odds", K_REAL, 1.0, 1e12, 1, 1, {F(stereo.drop_odds)}},
     {"retry_triangulation", K_BOOL, 0, 1, 0, 1, {F(stereo.retry_triangulation)}},
     {"retire_outliers", K_BOOL, 0, 1, 0, 1, {F(stereo.retire_outliers)}},
     {"add_landmarks", K_BOOL, 0, 1, 0, 1, {F(stereo.add_landmarks)}},

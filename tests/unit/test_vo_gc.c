@@ -303,9 +303,9 @@ static void gross_outliers(rp_frameset_t *fs, uint32_t j)
  * must-show: gc within 1.5x of its clean figures). On this sample (6 runs x 60 frames, the
  * defaults: 1-point RANSAC, the re-find, keyframes of the window adjustment holding only the
  * pixels their landmark's structure gate took, step 3b's drop test) the six columns are
- * 0.91-1.28x the clean figures; over 50 runs x 100 frames (`rigpose-sim --outliers 0.3`,
- * docs/results.md) 1.05-1.41x. Two runs were too few: one column moved from 1.35x to 1.56x
- * with the drop test, which over the 50 runs moves it by 1-4 %. With every pixel of a
+ * 0.86-1.39x the clean figures; over 50 runs x 100 frames (`rigpose-sim --outliers 0.3`,
+ * docs/results.md) 1.05-1.40x. Two runs were too few: with a first version of the drop test
+ * (odds 100) one column read 1.56x on them against 1.41x over the 50 runs. With every pixel of a
  * keyframe's landmarks in the window (before) the angles were 2.1-3.3x over the 50 runs: the
  * outliers in the windows had the adjustments refused, and gc's rotations drifted without
  * them. */

@@ -31,7 +31,10 @@ extern "C" {
 #endif
 
 #define RP_DROP_PASS RP_C(0.1)
-#define RP_DROP_ODDS RP_C(100.0) /* the layouts' default odds (stereo's drop_odds, gc's) */
+#define RP_DROP_ODDS RP_C(100.0) /* stereo's default drop_odds: a landmark left out in both
+                                  * cameras of its pair in one clean frame set goes */
+#define RP_DROP_ODDS_ONE (RP_DROP_ODDS * RP_DROP_ODDS) /* the same evidence from one observation
+                                  * per frame set (gc): two clean frame sets left out */
 
 typedef struct {
     rp_real s[RP_IDMAP_MAX_SLOTS];   /* per landmark slot: S (above) */

@@ -37,7 +37,7 @@ rp_vo_gc_cfg_t rp_vo_gc_default_cfg(void)
     c.ba.iterations = 2;
     c.one_point = 1; /* config/README.md, `one_point`: its cost and gain */
     c.ransac = 1;
-    c.drop_odds = RP_DROP_ODDS; /* step 3b (rp_vo_gc.h) */
+    c.drop_odds = RP_DROP_ODDS_ONE; /* step 3b (rp_vo_gc.h) */
     return c;
 }
 
@@ -564,13 +564,17 @@ rp_status_t rp_vo_gc_is_retired(const rp_vo_gc_t *vo, uint32_t id, uint8_t *is_r
  * all observed (every one of theirs is among the n). */
 static void drop_tracks(rp_vo_gc_t *vo, uint32_t n, const uint8_t had_image[RP_MAX_CAMS])
 {
-    uint32_t mask = 0;
+    uint32_t mask = 0, n_judged_in = 0;
     for (uint32_t i = 0; i < n; ++i) {
         uint16_t slot;
         const int ok = rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK;
         vo->obs_slot[i] = ok ? slot : (uint16_t)RP_IDMAP_MAX_SLOTS;
         vo->judged_in[i] = (uint8_t)(vo->in_pose[i] ? vo->used[i]
                                                     : ok && vo->taken[slot] == vo->frame + 1u);
+        n_judged_in += vo->judged_in[i];
+    }
+    if (2u * n_judged_in <= n) {
+        return; /* the test's premise: the consensus is a majority (else the map is in doubt) */
     }
     /* ignored: the arrays are the estimator's own and drop_odds was checked at init */
     (void)rp_droptest_run(&vo->drop, vo->obs_slot, vo->judged_in, n, vo->cfg.ekf.min_features,
@@ -687,7 +691,12 @@ rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t
             flags |= RP_EST_GATED;
         }
         refine_structure(vo, n);
-        if (vo->cfg.drop_odds > RP_C(0.0) && 2u * n_in > m_offered) {
+        /* judged only by an update that can judge tracks: the map's depths converged (at the
+         * start the updates judge the assumed depth, not the tracks), the prediction kept (not
+         * re-found), most of the offered observations taken in, and most of all of them
+         * (drop_tracks) */
+        if (vo->cfg.drop_odds > RP_C(0.0) && n_mature >= vo->cfg.min_mature && !refind_ran &&
+            2u * n_in > m_offered) {
             drop_tracks(vo, n, had_image);
         }
         rp_vo_gc_scale_step(vo, fs, refind_ran);
