@@ -225,7 +225,8 @@ typedef struct {
     rp_ransac_t rs;                        /* rig RANSAC's generator and scratch */
     uint32_t n_refound;                    /* updates redone at a pose re-found by rig RANSAC */
     rp_droptest_t drop;                    /* step 3b's test, by slot of lm */
-    uint16_t obs_slot[RP_VO_GC_MAX_OBS];   /* scratch: obs[i]'s landmark slot */
+    uint16_t obs_slot[RP_VO_GC_MAX_OBS];   /* scratch: obs[i]'s landmark slot (select_for_pose;
+                                            * RP_IDMAP_MAX_SLOTS: none) */
     uint8_t judged_in[RP_VO_GC_MAX_OBS];   /* scratch: obs[i] taken in (pose or structure) */
     uint8_t keep[RP_VO_GC_MAX_OBS];        /* scratch: obs[i]'s landmark is kept */
     rp_idmap_t retired;                    /* step 3b's retired tracks (group: camera) */

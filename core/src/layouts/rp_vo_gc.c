@@ -58,14 +58,20 @@ static rp_status_t lm_insert(rp_vo_gc_t *vo, uint32_t id, uint8_t cam, const rp_
 
 /* Drop every landmark not seen this frame whose camera delivered an image (its track was
  * lost); landmarks of cameras without an image are kept. Clears the marks. */
-static void lm_drop_lost(rp_vo_gc_t *vo, const uint8_t had_image[RP_MAX_CAMS])
+/* Bit cam set for each camera that delivered an image. */
+static uint32_t image_mask(const uint8_t had_image[RP_MAX_CAMS])
 {
     uint32_t mask = 0;
     for (uint32_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
         mask |= had_image[cam] ? (1u << cam) : 0u;
     }
+    return mask;
+}
+
+static void lm_drop_lost(rp_vo_gc_t *vo, const uint8_t had_image[RP_MAX_CAMS])
+{
     /* ignored: only NULL arguments fail */
-    (void)rp_lmtab_drop_unmarked(&vo->lm, mask, NULL);
+    (void)rp_lmtab_drop_unmarked(&vo->lm, image_mask(had_image), NULL);
 }
 
 /* ---- set-up ------------------------------------------------------------------------------ */
@@ -409,16 +415,22 @@ static uint32_t select_for_pose(rp_vo_gc_t *vo, uint32_t n, uint32_t *n_mature)
 {
     rp_pose_lin_t pl;
     *n_mature = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        uint16_t s;
+        vo->in_pose[i] = 0;
+        vo->obs_slot[i] = rp_lmtab_find(&vo->lm, vo->obs_id[i], &s) == RP_OK
+                              ? s
+                              : (uint16_t)RP_IDMAP_MAX_SLOTS;
+    }
     if (rp_pose_lin_set(&pl, vo->ekf.x) != RP_OK) {
         return 0;
     }
     const rp_real s2 = vo->cfg.ekf.sigma_px * vo->cfg.ekf.sigma_px;
     for (uint32_t i = 0; i < n; ++i) {
-        uint16_t s;
+        const uint16_t s = vo->obs_slot[i];
         rp_obs_t *o = &vo->obs[i];
         rp_real uv[2], JM[6];
-        vo->in_pose[i] = 0;
-        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &s) != RP_OK ||
+        if (s >= RP_IDMAP_MAX_SLOTS ||
             rp_rig_project(&vo->rig_m, o->cam, &pl, o->M, uv, NULL, JM) != RP_OK) {
             o->w = RP_C(0.0);
             continue;
@@ -440,8 +452,8 @@ static uint32_t select_for_pose(rp_vo_gc_t *vo, uint32_t n, uint32_t *n_mature)
     uint32_t m = 0;
     rp_real wsum = RP_C(0.0);
     for (uint32_t i = 0; i < n; ++i) {
-        uint16_t s;
-        if (rp_lmtab_find(&vo->lm, vo->obs_id[i], &s) != RP_OK || !(vo->obs[i].w > RP_C(0.0)) ||
+        const uint16_t s = vo->obs_slot[i];
+        if (s >= RP_IDMAP_MAX_SLOTS || !(vo->obs[i].w > RP_C(0.0)) ||
             (!all && !vo->mature[s])) {
             continue;
         }
@@ -564,13 +576,12 @@ rp_status_t rp_vo_gc_is_retired(const rp_vo_gc_t *vo, uint32_t id, uint8_t *is_r
  * all observed (every one of theirs is among the n). */
 static void drop_tracks(rp_vo_gc_t *vo, uint32_t n, const uint8_t had_image[RP_MAX_CAMS])
 {
-    uint32_t mask = 0, n_judged_in = 0;
+    uint32_t n_judged_in = 0;
     for (uint32_t i = 0; i < n; ++i) {
-        uint16_t slot;
-        const int ok = rp_lmtab_find(&vo->lm, vo->obs_id[i], &slot) == RP_OK;
-        vo->obs_slot[i] = ok ? slot : (uint16_t)RP_IDMAP_MAX_SLOTS;
+        const uint16_t slot = vo->obs_slot[i]; /* select_for_pose's */
         vo->judged_in[i] = (uint8_t)(vo->in_pose[i] ? vo->used[i]
-                                                    : ok && vo->taken[slot] == vo->frame + 1u);
+                                                    : slot < RP_IDMAP_MAX_SLOTS &&
+                                                          vo->taken[slot] == vo->frame + 1u);
         n_judged_in += vo->judged_in[i];
     }
     if (2u * n_judged_in <= n) {
@@ -592,12 +603,9 @@ static void drop_tracks(rp_vo_gc_t *vo, uint32_t n, const uint8_t had_image[RP_M
     if (n_drop == 0) {
         return;
     }
-    for (uint32_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
-        mask |= had_image[cam] ? (1u << cam) : 0u;
-    }
     /* ignored: only NULL arguments fail */
     (void)rp_lmtab_mark_ids(&vo->lm, vo->obs_id, vo->keep, n);
-    (void)rp_lmtab_drop_unmarked(&vo->lm, mask, NULL);
+    (void)rp_lmtab_drop_unmarked(&vo->lm, image_mask(had_image), NULL);
     vo->n_dropped += n_drop;
 }
 
@@ -609,13 +617,8 @@ static void prune_retired(rp_vo_gc_t *vo, const rp_frameset_t *fs,
     if (vo->retired.n == 0) {
         return;
     }
-    uint32_t mask = 0;
     for (uint8_t cam = 0; cam < RP_MAX_CAMS; ++cam) {
-        if (!had_image[cam]) {
-            continue;
-        }
-        mask |= 1u << cam;
-        for (uint16_t f = 0; f < fs->n[cam]; ++f) {
+        for (uint16_t f = 0; had_image[cam] && f < fs->n[cam]; ++f) {
             uint16_t slot;
             if (rp_idmap_find(&vo->retired, fs->f[cam][f].id, &slot) == RP_OK) {
                 /* ignored: slot is the map's own */
@@ -624,7 +627,7 @@ static void prune_retired(rp_vo_gc_t *vo, const rp_frameset_t *fs,
         }
     }
     /* ignored: only NULL arguments fail */
-    (void)rp_idmap_drop_unmarked(&vo->retired, mask, NULL);
+    (void)rp_idmap_drop_unmarked(&vo->retired, image_mask(had_image), NULL);
 }
 
 rp_status_t rp_vo_gc_step(rp_vo_gc_t *vo, const rp_frameset_t *fs, rp_estimate_t *est)

@@ -383,39 +383,42 @@ static rp_status_t run_estimator(rp_pipe_t *pipe, rp_estimate_t *est)
  * threshold while the scene's tracks left the view, and the pair re-initialised every frame
  * from the few left.) The right trackers are fed, not detecting: nothing to do there. A track
  * stays dormant until it is lost, also when the retired list, full, forgets it. */
+/* 1 if the layout's estimator retired track id (stereo's or gc's list). */
+static int is_retired(const rp_pipe_t *pipe, uint32_t id)
+{
+    uint8_t r = 0;
+    /* ignored: cannot fail: the pipeline's own estimator */
+    (void)(pipe->cfg.layout == RP_PIPE_GC ? rp_vo_gc_is_retired(&pipe->est.gc, id, &r)
+                                           : rp_vo_stereo_is_retired(&pipe->est.stereo, id, &r));
+    return r;
+}
+
+/* Tracker T's retired tracks that are not dormant yet go dormant (scratch: RP_MAX_FEATS_PER_CAM
+ * ids). */
+static void make_dormant(const rp_pipe_t *pipe, rp_tracker_t *T, uint32_t *scratch)
+{
+    uint16_t m = 0;
+    for (uint16_t i = 0; i < T->n; ++i) {
+        if (!T->dormant[i] && is_retired(pipe, T->id[i])) {
+            scratch[m++] = T->id[i];
+        }
+    }
+    /* ignored: cannot fail: the pipeline's own tracker */
+    (void)rp_track_set_dormant(T, scratch, m, NULL);
+}
+
 static void retired_dormant(rp_pipe_t *pipe)
 {
     if (pipe->cfg.layout == RP_PIPE_GC) {
-        /* gc: every camera's own tracker, its step 3b's retired tracks (rp_vo_gc.h) */
+        /* gc: every camera's own tracker, its step 3b's retired tracks (rp_vo_gc.h); pair 0's
+         * scratch (gc has no pairs) */
         for (uint8_t t = 0; t < pipe->n_trk; ++t) {
-            rp_tracker_t *T = &pipe->trk[t];
-            uint16_t m = 0;
-            for (uint16_t i = 0; i < T->n; ++i) {
-                uint8_t r = 0;
-                /* ignored: cannot fail: the pipeline's own estimator */
-                (void)rp_vo_gc_is_retired(&pipe->est.gc, T->id[i], &r);
-                if (r && !T->dormant[i]) {
-                    pipe->pm[0].drop_ids[m++] = T->id[i]; /* pair 0's scratch: gc has none */
-                }
-            }
-            /* ignored: cannot fail: the pipeline's own tracker */
-            (void)rp_track_set_dormant(T, pipe->pm[0].drop_ids, m, NULL);
+            make_dormant(pipe, &pipe->trk[t], pipe->pm[0].drop_ids);
         }
         return;
     }
     for (uint8_t k = 0; k < pipe->cfg.stereo.n_pairs; ++k) {
-        rp_tracker_t *A = &pipe->trk[pipe->cam_trk[pipe->pair[k].a]];
-        uint16_t m = 0;
-        for (uint16_t i = 0; i < A->n; ++i) {
-            uint8_t r = 0;
-            /* ignored: cannot fail: the pipeline's own estimator */
-            (void)rp_vo_stereo_is_retired(&pipe->est.stereo, A->id[i], &r);
-            if (r && !A->dormant[i]) {
-                pipe->pm[k].drop_ids[m++] = A->id[i];
-            }
-        }
-        /* ignored: cannot fail: the pipeline's own tracker */
-        (void)rp_track_set_dormant(A, pipe->pm[k].drop_ids, m, NULL);
+        make_dormant(pipe, &pipe->trk[pipe->cam_trk[pipe->pair[k].a]], pipe->pm[k].drop_ids);
     }
 }
 
