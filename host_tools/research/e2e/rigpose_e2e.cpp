@@ -286,7 +286,8 @@ void usage(FILE *out)
                  "                   --estimate-offsets)\n"
                  "  --quiet          no per-run lines\n"
                  "  --verbose        one line per frame set and method (status, features and those\n"
-                 "                   used per camera, landmarks, gated, errors)\n"
+                 "                   used per camera, landmarks, gated, the six errors; with\n"
+                 "                   --moving-object also the features on the object per camera)\n"
                  "  --track-truth    tracked features against the true projection of the scene\n"
                  "                   point each was born on: mean px, share over 1 and 3 px, by age\n"
                  "  --check-track PX exit 1 if a method's tracks are off by more than PX px mean one\n"
@@ -515,9 +516,29 @@ int main(int argc, char **argv)
                 if (verbose) {
                     const rp_pipe_info_t *inf = nullptr;
                     rp_pipe_info(pipes[m], &inf);
+                    unsigned on_obj[RP_MAX_CAMS] = {0}; /* features whose ray meets the object */
+                    for (int k = 0; fs && sc.moving_object && k < seq.rig().n_cams; ++k) {
+                        rpr::ObjView ov;
+                        for (unsigned f = 0; seq.object_view(j, k, &ov) && f < fs->n[k]; ++f) {
+                            const rp_real uv[2] = {fs->f[k][f].uv[0], fs->f[k][f].uv[1]};
+                            rp_real xn[2];
+                            double t;
+                            if (rp_cam_unproject(&seq.rig().cam[k].cam, uv, xn) == RP_OK) {
+                                const double nn = std::sqrt(1.0 + (double)xn[0] * xn[0] +
+                                                            (double)xn[1] * xn[1]);
+                                const float ry[3] = {(float)(xn[0] / nn), (float)(xn[1] / nn),
+                                                    (float)(1.0 / nn)};
+                                on_obj[k] += ov.hit_t(ry, &t) ? 1u : 0u;
+                            }
+                        }
+                    }
+                    if (sc.moving_object) { /* features on the object, per camera */
+                        std::printf("  run %u frame %u on object %u %u %u %u\n", r, j,
+                                    on_obj[0], on_obj[1], on_obj[2], on_obj[3]);
+                    }
                     std::printf("  run %u frame %u %-8s st %-12s flags 0x%02x feats %u %u %u %u %u %u "
                                 "used %u %u %u %u %u %u lm %u gated %u "
-                                "err tx %+.5f ty %+.5f tz %+.5f gamma %+.5f\n",
+                                "err tx %+.5f ty %+.5f tz %+.5f alpha %+.5f beta %+.5f gamma %+.5f\n",
                                 r, j, methods[m].name.c_str(), rp_status_str(st),
                                 (unsigned)est.flags, fs ? fs->n[0] : 0, fs ? fs->n[1] : 0,
                                 fs ? fs->n[2] : 0, fs ? fs->n[3] : 0, fs ? fs->n[4] : 0,
@@ -527,6 +548,8 @@ int main(int argc, char **argv)
                                 (double)est.p[0] - seq.truth(j)[0],
                                 (double)est.p[1] - seq.truth(j)[1],
                                 (double)est.p[2] - seq.truth(j)[2],
+                                (double)est.p[3] - seq.truth(j)[3],
+                                (double)est.p[4] - seq.truth(j)[4],
                                 (double)est.p[5] - seq.truth(j)[5]);
                     for (int q = 0; inf && q < RP_MAX_PAIRS; ++q) {
                         const rp_smatch_stats_t &ms = inf->match[q];
