@@ -46,6 +46,36 @@ static int later_than(int64_t a, int64_t b, int64_t tol)
     return a > b && dist_us(a, b) > (uint64_t)tol;
 }
 
+static int absent(const rp_lsrc_t *s, uint8_t k, int64_t now); /* below */
+
+/* sets: latest. Camera k's message at utime (after everything it delivered or holds) goes into
+ * the one set being filled, in place of an older one of k's not yet delivered (skipped: a slow
+ * estimator skips frames rather than falls behind), and makes the set ready when k is the set
+ * camera (or any camera: set_camera any, or the set camera absent) and utime is after the last
+ * set's time: the set's time is then utime. */
+static void latest_hold(rp_lsrc_t *s, uint8_t k, int64_t utime, int64_t now)
+{
+    rp_lsrc_pending_t *p = &s->pend[0];
+    if (!p->used) {
+        p->used = 1;
+        p->utime = utime;
+        p->first_rx_us = now;
+        memset(p->have, 0, sizeof p->have);
+        rp_frameset_reset(&p->fs, utime);
+    }
+    if (p->have[k]) {
+        s->n_skipped++;
+        p->have[k] = 0;
+    }
+    const int set_cam_live =
+        s->set_cam >= 0 && s->want[s->set_cam] && !absent(s, (uint8_t)s->set_cam, now);
+    if ((!set_cam_live || k == s->set_cam) && (!s->any_out || utime > s->last_set_utime) &&
+        (!s->trigger || utime > s->anchor)) {
+        s->trigger = 1;
+        s->anchor = utime;
+    }
+}
+
 static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *user)
 {
     (void)channel;
@@ -65,9 +95,15 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
     }
     const int64_t now = rp_hal_now_us();
     rp_lsrc_cam_t *c = &s->cam[k];
-    if (s->any_out && !later_than(m->utime, s->last_out_utime, s->tol_us)) {
-        /* Late. Not counted as heard either: a restarted front end catching up on the frames
-         * of the last timeout_ms would otherwise hold every set back until it is current. */
+    rp_lsrc_pending_t *hold = &s->pend[0]; /* sets: latest's one set being filled */
+    const int late =
+        s->latest ? (c->out_any && m->utime <= c->out_utime) ||
+                        (hold->used && hold->have[k] && m->utime <= hold->cam_utime[k])
+                  : s->any_out && !later_than(m->utime, s->last_out_utime, s->tol_us);
+    if (late) {
+        /* Late (latest: not after this camera's frame delivered or held). Not counted as heard
+         * either: a restarted front end catching up on the frames of the last timeout_ms would
+         * otherwise hold every set back until it is current. */
         s->n_late++;
         return;
     }
@@ -82,7 +118,11 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
     c->last_rx_us = now;
     memcpy(c->instance, m->instance, sizeof c->instance);
     rp_lsrc_pending_t *p = NULL, *free_slot = NULL;
-    for (int i = 0; i < RP_LSRC_PENDING; ++i) {
+    if (s->latest) {
+        latest_hold(s, k, m->utime, now);
+        p = hold;
+    }
+    for (int i = 0; i < RP_LSRC_PENDING && p == NULL; ++i) {
         rp_lsrc_pending_t *q = &s->pend[i];
         if (q->used && dist_us(q->utime, m->utime) <= (uint64_t)s->tol_us) {
             p = q;
@@ -126,11 +166,16 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
 
 /* Camera k of the layout sends nothing now: silent for timeout_ms; never heard, once a set has
  * waited timeout_ms for it (so that front ends started together, or sets due later than
- * timeout_ms after the start, all make the first set). */
+ * timeout_ms after the start, all make the first set), with sets: latest timeout_ms after
+ * the source opened. */
 static int absent(const rp_lsrc_t *s, uint8_t k, int64_t now)
 {
     const rp_lsrc_cam_t *c = &s->cam[k];
-    return c->seen ? now - c->last_rx_us > s->timeout_us : s->n_waited > 0;
+    if (c->seen) {
+        return now - c->last_rx_us > s->timeout_us;
+    }
+    /* latest: sets never wait, so never heard for timeout_ms since the source opened */
+    return s->latest ? now - s->open_us > s->timeout_us : s->n_waited > 0;
 }
 
 static rp_lsrc_pending_t *oldest(rp_lsrc_t *s, int *n_used)
@@ -152,6 +197,9 @@ static rp_lsrc_pending_t *oldest(rp_lsrc_t *s, int *n_used)
 /* The oldest pending set if it may go out now, else NULL. */
 static rp_lsrc_pending_t *ready(rp_lsrc_t *s, int64_t now)
 {
+    if (s->latest) {
+        return s->trigger ? &s->pend[0] : NULL; /* latest_hold */
+    }
     int n_used = 0;
     rp_lsrc_pending_t *p = oldest(s, &n_used);
     if (p == NULL) {
@@ -179,7 +227,7 @@ static rp_lsrc_pending_t *ready(rp_lsrc_t *s, int64_t now)
 static int64_t next_event(const rp_lsrc_t *s, int64_t deadline)
 {
     int64_t t = deadline;
-    for (int i = 0; i < RP_LSRC_PENDING; ++i) {
+    for (int i = 0; i < RP_LSRC_PENDING && !s->latest; ++i) { /* latest: sets do not wait */
         if (s->pend[i].used && s->pend[i].first_rx_us + s->timeout_us < t) {
             t = s->pend[i].first_rx_us + s->timeout_us;
         }
@@ -208,7 +256,9 @@ static void fill_cams(rp_lsrc_t *s, const rp_lsrc_pending_t *p, rp_hal_set_t *se
         }
         const int gone = s->want[k] && absent(s, k, now);
         fr->flags = RP_HAL_CAM_MISSING | (gone ? RP_HAL_CAM_GONE : 0u);
-        if (s->want[k] && p != NULL && len + 1 < sizeof s->err) {
+        /* latest: a camera at its own rate without a new frame is its normal, not news */
+        if (s->want[k] && p != NULL && (!s->latest || gone || !s->cam[k].seen) &&
+            len + 1 < sizeof s->err) {
             const int n = snprintf(s->err + len, sizeof s->err - len,
                                    "%scamera %u: no features in this set (%s)", len ? "; " : "",
                                    (unsigned)k,
@@ -230,21 +280,26 @@ static int has_image(const rp_lsrc_pending_t *p, uint8_t k)
 static int64_t set_times(rp_lsrc_t *s, rp_lsrc_pending_t *p)
 {
     int64_t t = p->utime;
-    for (uint8_t k = 0; k < s->n_cams; ++k) {
+    for (uint8_t k = 0; k < s->n_cams && !s->latest; ++k) {
         if (has_image(p, k)) {
             t = p->cam_utime[k];
             break;
         }
     }
-    if (s->any_out && t <= s->last_set_utime) {
+    if (s->latest) {
+        t = s->anchor; /* the frame that made the set (latest_hold) */
+    } else if (s->any_out && t <= s->last_set_utime) {
         t = p->utime; /* after the last set's time: its grouping time is past sync_tol_us */
     }
     p->fs.utime = t;
     for (uint8_t k = 0; k < s->n_cams; ++k) {
         p->fs.cam_dt_us[k] = 0;
-        if (p->have[k]) {
-            /* ignored: cannot fail: within 2 sync_tol_us of t, at most 2 s (rp_lsrc_open) */
-            (void)rp_pipe_cam_dt(p->cam_utime[k], t, &p->fs.cam_dt_us[k]);
+        /* matched: cannot fail, within 2 sync_tol_us of t, at most 2 s (rp_lsrc_open);
+         * latest: a frame more than 35 min from the set's time (a broken stamp) is left out */
+        if (p->have[k] && rp_pipe_cam_dt(p->cam_utime[k], t, &p->fs.cam_dt_us[k]) != RP_OK) {
+            p->have[k] = 0;
+            p->fs.n[k] = 0;
+            s->n_bad++;
         }
         if (s->want[k] && !has_image(p, k)) {
             p->fs.cam_flags[k] |= RP_FS_NO_IMAGE;
@@ -276,7 +331,14 @@ rp_hal_status_t rp_lsrc_grab(rp_lsrc_t *s, rp_hal_set_t *set)
             s->any_out = 1;
             s->last_out_utime = p->utime;
             s->last_set_utime = t;
+            for (uint8_t k = 0; k < s->n_cams; ++k) {
+                if (p->have[k]) {
+                    s->cam[k].out_any = 1;
+                    s->cam[k].out_utime = p->cam_utime[k];
+                }
+            }
             p->used = 0;
+            s->trigger = 0;
             return RP_HAL_OK;
         }
         if (now >= deadline) {
@@ -321,6 +383,17 @@ rp_hal_status_t rp_lsrc_open(rp_lsrc_t *s, lcm_t *lcm, const rp_config_t *cfg)
         /* ignored: fits */
         (void)snprintf(s->err, sizeof s->err, "lcm: sync_tol_us %lld outside 0..%d",
                        (long long)cfg->hal.sync_tol_us, RP_LSRC_TOL_MAX_US);
+        return RP_HAL_E_ARG;
+    }
+    s->latest = cfg->hal.sets_latest;
+    s->set_cam = cfg->hal.set_cam;
+    s->open_us = rp_hal_now_us();
+    if (s->latest && (s->set_cam < -1 || s->set_cam >= (int)s->n_cams ||
+                      (s->set_cam >= 0 && !s->want[s->set_cam]))) {
+        /* ignored: fits */
+        (void)snprintf(s->err, sizeof s->err,
+                       "lcm: set_camera %d is not a camera of the layout (or give any)",
+                       (int)s->set_cam);
         return RP_HAL_E_ARG;
     }
     s->lcm = lcm;

@@ -18,6 +18,16 @@
  * catching up does not hold the sets back). Sets go out in time order; a message for a time at or before a set already out
  * is late and dropped (counted).
  *
+ * Assembly with `sets: latest` (cfg.hal.sets_latest; free-running cameras at their own rates,
+ * as the v4l2 source's rp_hal_group_latest): no grouping by sync_tol_us and no waiting. Each
+ * camera's newest message not yet delivered is held (a newer one replaces it: n_skipped); a
+ * message of the set camera (cfg.hal.set_cam; any camera with `any`, or while the set camera
+ * is absent) for a time after the last set's makes the set at once, with every camera's held
+ * message at its own time, the set's time that message's, the others MISSING (not an error:
+ * rp_lsrc_errmsg names only cameras never heard or gone). A message not after the last one
+ * its camera delivered or holds is late. A camera never heard is absent timeout_ms after
+ * rp_lsrc_open.
+ *
  * Times. Each message's utime is its camera's own capture time (rigpose-frontend stamps each
  * camera's image with the HAL's per-camera stamp). The set's time (set->utime, feats->utime)
  * is, as the v4l2 HAL's, the capture time of the lowest-index camera of the set that delivered
@@ -25,7 +35,8 @@
  * not after the previous set's (cameras spread over more than sync_tol_us), the set's first
  * message's time, which always is. So the set's time does not depend on the order the
  * messages arrived in. feats->cam_dt_us[k] is camera k's time minus the set's (within
- * 2 sync_tol_us: sync_tol_us is at most 1 s) and set->cam[k].utime camera k's time; a camera
+ * 2 sync_tol_us: sync_tol_us is at most 1 s; with sets: latest a camera's frame more than 35
+ * min from the set's time is left out, counted bad) and set->cam[k].utime camera k's time; a camera
  * of the layout without a message in the set, or whose message says MISSING, is flagged
  * RP_FS_NO_IMAGE (as the in-process pipeline flags a camera without an image).
  *
@@ -69,6 +80,8 @@ typedef struct {
     int8_t instance[32];               /* its front end, as in the last message */
     int64_t last_rx_us;                /* HAL clock of the last message */
     int64_t last_utime;                /* latest frame time from this camera, us */
+    uint8_t out_any;                   /* a frame of it went out in a set (latest) */
+    int64_t out_utime;                 /* the time of the last one, us */
 } rp_lsrc_cam_t;
 
 typedef struct rp_lsrc rp_lsrc_t;
@@ -82,6 +95,11 @@ struct rp_lsrc {
     uint8_t n_cams;
     uint8_t want[RP_MAX_CAMS];         /* cameras of the layout */
     int64_t tol_us, timeout_us;
+    uint8_t latest;                    /* cfg.hal.sets_latest (Assembly, sets: latest) */
+    int8_t set_cam;                    /* cfg.hal.set_cam: the set camera, -1 any */
+    uint8_t trigger;                   /* latest: pend[0] is ready, its time anchor */
+    int64_t anchor;
+    int64_t open_us;                   /* HAL clock at rp_lsrc_open */
     uint8_t any_out;
     int64_t last_out_utime;            /* grouping time of the last set out (late messages) */
     int64_t last_set_utime;            /* its set time (rp_lcmsrc.h, Times) */
@@ -100,6 +118,7 @@ struct rp_lsrc {
     char err[RP_LSRC_ERR_MAX];
     uint32_t n_waited;                 /* sets that went out after waiting timeout_ms */
     uint32_t n_msgs, n_late, n_bad, n_full, n_restarts;
+    uint32_t n_skipped;                /* latest: frames replaced by a newer one before a set */
 };
 
 /* Largest sync_tol_us the source takes (the configuration's limit): camera times of a set then
@@ -108,7 +127,7 @@ struct rp_lsrc {
 
 /* Subscribe on lcm to the features channel of each camera of cfg's layout (cfg must outlive s).
  * RP_HAL_OK; RP_HAL_E_ARG (NULL, a layout without cameras, a channel name too long, sync_tol_us
- * outside 0..RP_LSRC_TOL_MAX_US) or
+ * outside 0..RP_LSRC_TOL_MAX_US, with sets: latest a set camera outside the layout) or
  * RP_HAL_E_OPEN (lcm_subscribe failed), the reason in rp_lsrc_errmsg. */
 rp_hal_status_t rp_lsrc_open(rp_lsrc_t *s, lcm_t *lcm, const rp_config_t *cfg);
 

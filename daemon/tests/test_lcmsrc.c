@@ -15,7 +15,11 @@
  *     time: the lowest-index camera with an image, whatever order the messages came in) and
  *     set->cam[k].utime; a camera of the layout without a message, or whose message says
  *     MISSING, is RP_FS_NO_IMAGE; messages at the ends of int64 do not overflow; a tolerance
- *     over 1 s is refused.
+ *     over 1 s is refused;
+ *   - sets: latest: a set at once per frame of the set camera (or of any camera), every other
+ *     camera's newest undelivered frame at its own time, the rest MISSING without an error;
+ *     late and skipped frames; a silent set camera hands the sets to the others and takes them
+ *     back when it sends again; a set camera outside the layout is refused.
  */
 #include <lcm/lcm.h>
 #include <math.h>
@@ -243,6 +247,113 @@ static void test_each_camera_at_its_own_time(void **state)
     assert_int_equal(g_src.n_late, 1);
 }
 
+/* sets: latest (free-running cameras at their own rates), camera 0 the set camera. */
+static int setup_latest(void **state)
+{
+    setup(state);
+    rp_lsrc_close(&g_src);
+    g_cfg.hal.sets_latest = 1;
+    g_cfg.hal.set_cam = 0;
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+    return 0;
+}
+
+/* Each frame of the set camera makes a set at once, at its time, with every other camera's
+ * newest frame not yet delivered at its own time (40 ms apart: no tolerance groups them); a
+ * camera without a new frame is MISSING, not an error; older held frames are skipped; a frame
+ * not after its camera's last delivered one is late. */
+static void test_latest_a_set_per_frame_of_the_set_camera(void **state)
+{
+    (void)state;
+    send(1, 40000, 0, 3, 0, "B"); /* camera 0 not heard yet (nor absent): no set */
+    send(1, 60000, 1, 3, 0, "B");
+    send(1, 80000, 2, 4, 0, "B"); /* replaces the frame of 60000 */
+    send(0, 100000, 0, 5, 0, "A");
+    int64_t t0 = rp_hal_now_us();
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(ms_since(t0) < TIMEOUT_MS / 2);
+    assert_true(g_set.utime == 100000 && g_set.feats->utime == 100000);
+    assert_int_equal(g_set.feats->n[0], 5);
+    assert_int_equal(g_set.feats->n[1], 4);
+    assert_int_equal(g_set.feats->cam_dt_us[0], 0);
+    assert_int_equal(g_set.feats->cam_dt_us[1], -20000);
+    assert_true(g_set.cam[1].utime == 80000);
+    assert_int_equal(g_set.cam[1].seq, 2);
+    assert_int_equal(g_src.n_skipped, 2);
+    assert_string_equal(rp_lsrc_errmsg(&g_src), "");
+
+    /* camera 1 has nothing new: the next set goes at once without it, MISSING, no message */
+    send(0, 133000, 1, 5, 0, "A");
+    t0 = rp_hal_now_us();
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(ms_since(t0) < TIMEOUT_MS / 2);
+    assert_true(g_set.utime == 133000);
+    assert_int_equal(g_set.cam[1].flags, RP_HAL_CAM_MISSING);
+    assert_int_equal(g_set.feats->n[1], 0);
+    assert_int_equal(g_set.feats->cam_flags[1], RP_FS_NO_IMAGE);
+    assert_string_equal(rp_lsrc_errmsg(&g_src), "");
+
+    /* late: camera 1's frame of 80000 again (delivered), camera 0's before its last */
+    send(1, 80000, 2, 4, 0, "B");
+    send(0, 120000, 2, 5, 0, "A");
+    send(1, 140000, 3, 2, 0, "B"); /* after camera 0's set: held for the next one */
+    send(0, 166000, 3, 5, 0, "A");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 166000);
+    assert_int_equal(g_set.feats->cam_dt_us[1], -26000);
+    assert_int_equal(g_set.feats->n[1], 2);
+    assert_int_equal(g_src.n_late, 2);
+}
+
+/* set_camera any: every frame makes a set; one not after the last set's time joins the next
+ * set at its own (earlier) time. A silent set camera: the other cameras' frames make the sets. */
+static void test_latest_any_camera_and_a_gone_set_camera(void **state)
+{
+    (void)state;
+    rp_lsrc_close(&g_src);
+    g_cfg.hal.set_cam = -1;
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+    send(1, 10000, 0, 2, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 10000);
+    assert_int_equal(g_set.cam[0].flags, RP_HAL_CAM_MISSING);
+    send(0, 9000, 0, 3, 0, "A"); /* captured before the last set: no set of its own */
+    send(1, 43000, 1, 2, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 43000);
+    assert_int_equal(g_set.feats->n[0], 3);
+    assert_int_equal(g_set.feats->cam_dt_us[0], -34000);
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_E_TIMEOUT); /* nothing new */
+
+    /* set camera 0, silent longer than timeout_ms (or never heard for that long after the
+     * source opened): camera 1's frames make the sets */
+    rp_lsrc_close(&g_src);
+    g_cfg.hal.set_cam = 0;
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+    send(0, 50000, 0, 3, 0, "A");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    rp_hal_sleep_us((int64_t)(TIMEOUT_MS + 10) * 1000);
+    send(1, 90000, 1, 2, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 90000);
+    assert_int_equal(g_set.cam[0].flags, RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE);
+    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "silent for longer than timeout_ms"));
+    /* it comes back: its frames make the sets again, camera 1's alone no longer */
+    send(0, 100000, 1, 3, 0, "A");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 100000);
+    send(1, 110000, 2, 2, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_E_TIMEOUT);
+
+    /* a set camera outside the layout is refused */
+    rp_lsrc_close(&g_src);
+    g_cfg.hal.set_cam = 2;
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_E_ARG);
+    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "set_camera 2 is not a camera of the layout"));
+    g_cfg.hal.set_cam = 0;
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+}
+
 static void test_a_tolerance_over_a_second_is_refused(void **state)
 {
     (void)state;
@@ -285,6 +396,10 @@ int main(void)
                                         teardown),
         cmocka_unit_test_setup_teardown(test_a_timeout_with_nothing_heard, setup, teardown),
         cmocka_unit_test_setup_teardown(test_each_camera_at_its_own_time, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_latest_a_set_per_frame_of_the_set_camera,
+                                        setup_latest, teardown),
+        cmocka_unit_test_setup_teardown(test_latest_any_camera_and_a_gone_set_camera,
+                                        setup_latest, teardown),
         cmocka_unit_test_setup_teardown(test_a_tolerance_over_a_second_is_refused, setup,
                                         teardown),
         cmocka_unit_test(test_layout_cameras_and_partners),
