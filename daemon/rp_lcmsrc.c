@@ -48,11 +48,29 @@ static int later_than(int64_t a, int64_t b, int64_t tol)
 
 static int absent(const rp_lsrc_t *s, uint8_t k, int64_t now); /* below */
 
-/* sets: latest. Camera k's message at utime (after everything it delivered or holds) goes into
+/* sets: latest: the set camera is live (set_camera given and not absent). */
+static int set_cam_live(const rp_lsrc_t *s, int64_t now)
+{
+    return s->set_cam >= 0 && !absent(s, (uint8_t)s->set_cam, now);
+}
+
+/* sets: latest: frame (camera k, utime) makes the set ready, its time utime, if it is after the
+ * last set's time and after the anchor so far. */
+static void latest_anchor(rp_lsrc_t *s, uint8_t k, int64_t utime)
+{
+    if ((!s->any_out || utime > s->last_set_utime) && (!s->trigger || utime > s->anchor)) {
+        s->trigger = 1;
+        s->anchor = utime;
+        s->anchor_cam = k;
+    }
+}
+
+/* sets: latest. Camera k's image at utime (after everything it delivered or holds) goes into
  * the one set being filled, in place of an older one of k's not yet delivered (skipped: a slow
- * estimator skips frames rather than falls behind), and makes the set ready when k is the set
- * camera (or any camera: set_camera any, or the set camera absent) and utime is after the last
- * set's time: the set's time is then utime. */
+ * estimator skips frames rather than falls behind, rp_lsrc_grab drains the queue before a set
+ * goes out), and makes the set ready when k is the set camera (or any camera: set_camera any,
+ * or the set camera absent) and utime is after the last set's time: the set's time is then
+ * utime. A frame that replaces the anchor's moves the anchor with it. */
 static void latest_hold(rp_lsrc_t *s, uint8_t k, int64_t utime, int64_t now)
 {
     rp_lsrc_pending_t *p = &s->pend[0];
@@ -66,14 +84,24 @@ static void latest_hold(rp_lsrc_t *s, uint8_t k, int64_t utime, int64_t now)
     if (p->have[k]) {
         s->n_skipped++;
         p->have[k] = 0;
+        if (s->trigger && s->anchor_cam == k) {
+            s->anchor = utime; /* after the replaced frame's time, so after the last set's */
+        }
     }
-    const int set_cam_live =
-        s->set_cam >= 0 && s->want[s->set_cam] && !absent(s, (uint8_t)s->set_cam, now);
-    if ((!set_cam_live || k == s->set_cam) && (!s->any_out || utime > s->last_set_utime) &&
-        (!s->trigger || utime > s->anchor)) {
-        s->trigger = 1;
-        s->anchor = utime;
+    if (!set_cam_live(s, now) || k == s->set_cam) {
+        latest_anchor(s, k, utime);
     }
+}
+
+/* Camera c's front end was heard now, message m (a new instance: restarted). */
+static void heard(rp_lsrc_t *s, rp_lsrc_cam_t *c, const rigpose_features_t *m, int64_t now)
+{
+    if (c->seen && memcmp(c->instance, m->instance, sizeof c->instance) != 0) {
+        s->n_restarts++;
+    }
+    c->seen = 1;
+    c->last_rx_us = now;
+    memcpy(c->instance, m->instance, sizeof c->instance);
 }
 
 static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *user)
@@ -96,6 +124,13 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
     const int64_t now = rp_hal_now_us();
     rp_lsrc_cam_t *c = &s->cam[k];
     rp_lsrc_pending_t *hold = &s->pend[0]; /* sets: latest's one set being filled */
+    if (s->latest && (m->state & RP_HAL_CAM_MISSING)) {
+        /* latest: a front end's word that this camera had no image (a multi-camera front end
+         * stamps it with its set's time): heard, but neither held, nor a set's time, nor a
+         * bound on the camera's next frames */
+        heard(s, c, m, now);
+        return;
+    }
     const int late =
         s->latest ? (c->out_any && m->utime <= c->out_utime) ||
                         (hold->used && hold->have[k] && m->utime <= hold->cam_utime[k])
@@ -107,16 +142,11 @@ static void on_features(const lcm_recv_buf_t *rb, const char *channel, void *use
         s->n_late++;
         return;
     }
-    if (c->seen && memcmp(c->instance, m->instance, sizeof c->instance) != 0) {
-        s->n_restarts++;
-    }
     if (!c->seen || m->utime > c->last_utime ||
         memcmp(c->instance, m->instance, sizeof c->instance) != 0) {
         c->last_utime = m->utime;
     }
-    c->seen = 1;
-    c->last_rx_us = now;
-    memcpy(c->instance, m->instance, sizeof c->instance);
+    heard(s, c, m, now);
     rp_lsrc_pending_t *p = NULL, *free_slot = NULL;
     if (s->latest) {
         latest_hold(s, k, m->utime, now);
@@ -198,7 +228,17 @@ static rp_lsrc_pending_t *oldest(rp_lsrc_t *s, int *n_used)
 static rp_lsrc_pending_t *ready(rp_lsrc_t *s, int64_t now)
 {
     if (s->latest) {
-        return s->trigger ? &s->pend[0] : NULL; /* latest_hold */
+        /* latest_hold; and when the set camera has turned absent since the frames now held
+         * came, the newest of them makes the set, as the next message would */
+        const rp_lsrc_pending_t *h = &s->pend[0];
+        if (!s->trigger && h->used && !set_cam_live(s, now)) {
+            for (uint8_t k = 0; k < s->n_cams; ++k) {
+                if (h->have[k]) {
+                    latest_anchor(s, k, h->cam_utime[k]); /* the newest after the last set */
+                }
+            }
+        }
+        return s->trigger ? &s->pend[0] : NULL;
     }
     int n_used = 0;
     rp_lsrc_pending_t *p = oldest(s, &n_used);
@@ -321,6 +361,19 @@ rp_hal_status_t rp_lsrc_grab(rp_lsrc_t *s, rp_hal_set_t *set)
     for (;;) {
         const int64_t now = rp_hal_now_us();
         rp_lsrc_pending_t *p = ready(s, now);
+        if (p != NULL && s->latest) {
+            /* every message already queued first: a set camera's newer frame replaces the
+             * one that made the set (a slow estimator skips frames, not falls behind) */
+            int got = 1;
+            for (int i = 0; i < RP_LSRC_DRAIN_MAX && got > 0; ++i) {
+                got = lcm_handle_timeout(s->lcm, 0);
+            }
+            if (got < 0) {
+                /* ignored: fits */
+                (void)snprintf(s->err, sizeof s->err, "lcm: lcm_handle failed");
+                return RP_HAL_E_IO;
+            }
+        }
         if (p != NULL) {
             const int64_t t = set_times(s, p);
             s->out = p->fs;
@@ -388,13 +441,16 @@ rp_hal_status_t rp_lsrc_open(rp_lsrc_t *s, lcm_t *lcm, const rp_config_t *cfg)
     s->latest = cfg->hal.sets_latest;
     s->set_cam = cfg->hal.set_cam;
     s->open_us = rp_hal_now_us();
-    if (s->latest && (s->set_cam < -1 || s->set_cam >= (int)s->n_cams ||
-                      (s->set_cam >= 0 && !s->want[s->set_cam]))) {
+    if (s->latest && (s->set_cam < -1 || s->set_cam >= (int)s->n_cams)) {
         /* ignored: fits */
-        (void)snprintf(s->err, sizeof s->err,
-                       "lcm: set_camera %d is not a camera of the layout (or give any)",
+        (void)snprintf(s->err, sizeof s->err, "lcm: set_camera %d is not a camera of the rig",
                        (int)s->set_cam);
         return RP_HAL_E_ARG;
+    }
+    for (uint8_t k = 0; s->latest && s->set_cam >= 0 && !s->want[s->set_cam]; ++k) {
+        if (s->want[k]) {
+            s->set_cam = (int8_t)k; /* the source hears only the layout's cameras: its first */
+        }
     }
     s->lcm = lcm;
     s->tol_us = cfg->hal.sync_tol_us;

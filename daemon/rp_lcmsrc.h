@@ -7,7 +7,7 @@
  * Not a HAL source (the HAL library does not link LCM); the same shape of calls: open, grab (a
  * set, or RP_HAL_E_TIMEOUT after cfg.hal.timeout_ms), errmsg, close. One per process.
  *
- * Assembly. A message joins the pending set whose utime is within cfg.hal.sync_tol_us of its
+ * Assembly (`sets: matched`, the default). A message joins the pending set whose utime is within cfg.hal.sync_tol_us of its
  * own, else opens one (at most RP_LSRC_PENDING at once). The oldest pending set goes out when
  * each camera of the layout (rp_feats_layout_cams) is in it, or has sent a later frame, or is
  * absent; or when the set has waited timeout_ms since its first message. A camera is absent
@@ -20,15 +20,19 @@
  *
  * Assembly with `sets: latest` (cfg.hal.sets_latest; free-running cameras at their own rates,
  * as the v4l2 source's rp_hal_group_latest): no grouping by sync_tol_us and no waiting. Each
- * camera's newest message not yet delivered is held (a newer one replaces it: n_skipped); a
- * message of the set camera (cfg.hal.set_cam; any camera with `any`, or while the set camera
- * is absent) for a time after the last set's makes the set at once, with every camera's held
- * message at its own time, the set's time that message's, the others MISSING (not an error:
- * rp_lsrc_errmsg names only cameras never heard or gone). A message not after the last one
- * its camera delivered or holds is late. A camera never heard is absent timeout_ms after
- * rp_lsrc_open.
+ * camera's newest image not yet delivered is held (a newer one replaces it: n_skipped); an
+ * image of the set camera (cfg.hal.set_cam, or the layout's first camera if that one is not
+ * the layout's: the source hears no other; any camera with `any`, or while the set camera is
+ * absent) for a time after the last set's makes the set, with every camera's held image at
+ * its own time, the set's time that image's, the others MISSING (not an error: rp_lsrc_errmsg
+ * names only cameras never heard or gone). Before the set goes out the messages already
+ * queued are read, so a slow estimator gets the newest frames and skips the rest. When the
+ * set camera turns absent while images are held, the newest of them makes a set. An image
+ * not after the last one its camera delivered or holds is late; a message saying the camera
+ * had no image (MISSING, as a multi-camera front end sends) only counts as heard. A camera
+ * never heard is absent timeout_ms after rp_lsrc_open.
  *
- * Times. Each message's utime is its camera's own capture time (rigpose-frontend stamps each
+ * Times (with `sets: latest` the set's time is the image that made it, above). Each message's utime is its camera's own capture time (rigpose-frontend stamps each
  * camera's image with the HAL's per-camera stamp). The set's time (set->utime, feats->utime)
  * is, as the v4l2 HAL's, the capture time of the lowest-index camera of the set that delivered
  * an image (a message without features_t.state's MISSING bit); if none did, or if that time is
@@ -62,6 +66,8 @@
 #define RP_LSRC_PENDING 8   /* frame sets being assembled at once */
 #define RP_LSRC_ERR_MAX 320
 #define RP_LSRC_ID_CAMS 16  /* rp_track_id_cam's range */
+#define RP_LSRC_DRAIN_MAX 1024 /* sets: latest: queued messages read at most before a set goes
+                                * out (the subscriptions' queues hold 120 per camera) */
 
 typedef struct {
     uint8_t used;
@@ -97,8 +103,9 @@ struct rp_lsrc {
     int64_t tol_us, timeout_us;
     uint8_t latest;                    /* cfg.hal.sets_latest (Assembly, sets: latest) */
     int8_t set_cam;                    /* cfg.hal.set_cam: the set camera, -1 any */
-    uint8_t trigger;                   /* latest: pend[0] is ready, its time anchor */
-    int64_t anchor;
+    uint8_t trigger;                   /* latest: pend[0] is ready, its time anchor, the */
+    int64_t anchor;                    /*   time of camera anchor_cam's frame in it */
+    uint8_t anchor_cam;
     int64_t open_us;                   /* HAL clock at rp_lsrc_open */
     uint8_t any_out;
     int64_t last_out_utime;            /* grouping time of the last set out (late messages) */
@@ -127,7 +134,7 @@ struct rp_lsrc {
 
 /* Subscribe on lcm to the features channel of each camera of cfg's layout (cfg must outlive s).
  * RP_HAL_OK; RP_HAL_E_ARG (NULL, a layout without cameras, a channel name too long, sync_tol_us
- * outside 0..RP_LSRC_TOL_MAX_US, with sets: latest a set camera outside the layout) or
+ * outside 0..RP_LSRC_TOL_MAX_US, with sets: latest a set camera outside the rig) or
  * RP_HAL_E_OPEN (lcm_subscribe failed), the reason in rp_lsrc_errmsg. */
 rp_hal_status_t rp_lsrc_open(rp_lsrc_t *s, lcm_t *lcm, const rp_config_t *cfg);
 

@@ -18,8 +18,11 @@
  *     over 1 s is refused;
  *   - sets: latest: a set at once per frame of the set camera (or of any camera), every other
  *     camera's newest undelivered frame at its own time, the rest MISSING without an error;
- *     late and skipped frames; a silent set camera hands the sets to the others and takes them
- *     back when it sends again; a set camera outside the layout is refused.
+ *     late and skipped frames; a silent set camera hands the sets to the others (a frame held
+ *     when it turns absent makes a set at once) and takes them back when it sends again; a
+ *     queued backlog gives the newest frame; MISSING messages only count as heard; a set
+ *     camera never heard is absent after timeout_ms; one outside the layout: the layout's
+ *     first; outside the rig: refused.
  */
 #include <lcm/lcm.h>
 #include <math.h>
@@ -305,6 +308,17 @@ static void test_latest_a_set_per_frame_of_the_set_camera(void **state)
     assert_int_equal(g_src.n_late, 2);
 }
 
+/* sets: latest, set camera 0 not sending: the grab waits until camera 0 is absent, then the
+ * frame held (at utime) makes the set, camera 0 MISSING and GONE. */
+static void set_once_camera_0_is_absent(int64_t utime)
+{
+    const int64_t t0 = rp_hal_now_us();
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(ms_since(t0) >= TIMEOUT_MS / 2);
+    assert_true(g_set.utime == utime);
+    assert_int_equal(g_set.cam[0].flags, RP_HAL_CAM_MISSING | RP_HAL_CAM_GONE);
+}
+
 /* set_camera any: every frame makes a set; one not after the last set's time joins the next
  * set at its own (earlier) time. A silent set camera: the other cameras' frames make the sets. */
 static void test_latest_any_camera_and_a_gone_set_camera(void **state)
@@ -342,16 +356,70 @@ static void test_latest_any_camera_and_a_gone_set_camera(void **state)
     send(0, 100000, 1, 3, 0, "A");
     assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
     assert_true(g_set.utime == 100000);
+    /* camera 1's frame waits for camera 0's; camera 0 falls silent again: when it turns
+     * absent, the frame held makes the set without a new message */
     send(1, 110000, 2, 2, 0, "B");
-    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_E_TIMEOUT);
+    set_once_camera_0_is_absent(110000);
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_E_TIMEOUT); /* nothing held now */
 
-    /* a set camera outside the layout is refused */
+    /* a set camera outside the layout: the layout's first (the source hears only those);
+     * outside the rig: refused */
     rp_lsrc_close(&g_src);
     g_cfg.hal.set_cam = 2;
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+    assert_int_equal(g_src.set_cam, 0);
+    rp_lsrc_close(&g_src);
+    g_cfg.hal.set_cam = 3;
     assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_E_ARG);
-    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "set_camera 2 is not a camera of the layout"));
+    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "set_camera 3 is not a camera of the rig"));
     g_cfg.hal.set_cam = 0;
     assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+}
+
+/* Camera cam's message saying it had no image (a multi-camera front end's MISSING state). */
+static void send_missing(uint8_t cam, int64_t utime, int32_t seq)
+{
+    rp_pub_fill_features(&g_m, cam, utime, seq, NULL, 0);
+    g_m.state = RIGPOSE_STATUS_T_CAM_MISSING;
+    memcpy(g_m.instance, cam ? "B" : "A", 1);
+    char ch[RP_CFG_CHANNEL_MAX + 8];
+    assert_int_equal(rp_feats_channel(g_cfg.features_channel, cam, ch, sizeof ch), 0);
+    assert_int_equal(rp_pub_features(g_lcm, ch, &g_m), RP_PUB_OK);
+}
+
+/* A slow estimator: frames queued before a grab are read first, the set camera's newest makes
+ * the set, the older ones are skipped. A MISSING message neither replaces a held image nor
+ * makes a set nor bounds its camera's next frames. A set camera never heard is absent
+ * timeout_ms after the source opened. */
+static void test_latest_backlog_missing_and_never_heard(void **state)
+{
+    (void)state;
+    send(0, 100000, 0, 5, 0, "A");
+    send(0, 133000, 1, 5, 0, "A");
+    send(0, 166000, 2, 5, 0, "A");
+    send(1, 150000, 0, 2, 0, "B");
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK);
+    assert_true(g_set.utime == 166000);
+    assert_int_equal(g_set.cam[0].seq, 2);
+    assert_int_equal(g_set.feats->cam_dt_us[1], -16000);
+    assert_int_equal(g_src.n_skipped, 2);
+
+    send(1, 180000, 1, 2, 0, "B");
+    send_missing(1, 199000, 2);        /* no image: camera 1's frame of 180000 stays held */
+    send(1, 190000, 3, 3, 0, "B");     /* after 180000, before the MISSING stamp: not late */
+    send_missing(0, 199000, 3);        /* the set camera without an image: no set */
+    assert_int_equal(rp_lsrc_grab(&g_src, &g_set), RP_HAL_OK); /* camera 0 silent: absent */
+    assert_true(g_set.utime == 190000);
+    assert_int_equal(g_set.feats->n[1], 3);
+    assert_int_equal(g_src.n_late, 0);
+    assert_int_equal(g_src.n_skipped, 3);
+
+    /* a new source; its set camera never heard: after timeout_ms camera 1's frames make sets */
+    rp_lsrc_close(&g_src);
+    assert_int_equal(rp_lsrc_open(&g_src, g_lcm, &g_cfg), RP_HAL_OK);
+    send(1, 300000, 4, 2, 0, "B");
+    set_once_camera_0_is_absent(300000);
+    assert_non_null(strstr(rp_lsrc_errmsg(&g_src), "its front end not heard yet"));
 }
 
 static void test_a_tolerance_over_a_second_is_refused(void **state)
@@ -399,6 +467,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_latest_a_set_per_frame_of_the_set_camera,
                                         setup_latest, teardown),
         cmocka_unit_test_setup_teardown(test_latest_any_camera_and_a_gone_set_camera,
+                                        setup_latest, teardown),
+        cmocka_unit_test_setup_teardown(test_latest_backlog_missing_and_never_heard,
                                         setup_latest, teardown),
         cmocka_unit_test_setup_teardown(test_a_tolerance_over_a_second_is_refused, setup,
                                         teardown),
