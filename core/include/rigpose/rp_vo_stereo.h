@@ -49,8 +49,8 @@
 #ifndef RP_VO_STEREO_H
 #define RP_VO_STEREO_H
 
-#include "rp_ekf.h"
 #include "rp_droptest.h"
+#include "rp_ekf.h"
 #include "rp_ekf1pt.h"
 #include "rp_frame.h"
 #include "rp_lmtab.h"

@@ -56,8 +56,6 @@ static rp_status_t lm_insert(rp_vo_gc_t *vo, uint32_t id, uint8_t cam, const rp_
     return st;
 }
 
-/* Drop every landmark not seen this frame whose camera delivered an image (its track was
- * lost); landmarks of cameras without an image are kept. Clears the marks. */
 /* Bit cam set for each camera that delivered an image. */
 static uint32_t image_mask(const uint8_t had_image[RP_MAX_CAMS])
 {
@@ -68,6 +66,8 @@ static uint32_t image_mask(const uint8_t had_image[RP_MAX_CAMS])
     return mask;
 }
 
+/* Drop every landmark not seen this frame whose camera delivered an image (its track was
+ * lost); landmarks of cameras without an image are kept. Clears the marks. */
 static void lm_drop_lost(rp_vo_gc_t *vo, const uint8_t had_image[RP_MAX_CAMS])
 {
     /* ignored: only NULL arguments fail */
@@ -229,9 +229,11 @@ static uint16_t top_up_camera(rp_vo_gc_t *vo, const rp_frameset_t *fs, uint8_t c
     for (uint16_t f = 0; f < fs->n[cam]; ++f) {
         const rp_feat_t *ft = &fs->f[cam][f];
         uint16_t slot;
+        uint8_t retired = 0;
+        /* ignored: vo and the flag are ours */
+        (void)rp_vo_gc_is_retired(vo, ft->id, &retired);
         if (ft->id == RP_VO_GC_EMPTY_ID || !rp_all_finite(ft->uv, 2) ||
-            rp_lmtab_find(&vo->lm, ft->id, &slot) == RP_OK ||
-            (vo->retired.n > 0 && rp_idmap_find(&vo->retired, ft->id, &slot) == RP_OK)) {
+            rp_lmtab_find(&vo->lm, ft->id, &slot) == RP_OK || retired) {
             continue; /* a landmark already, or a retired track (step 3b) */
         }
         rp_point3_t pt;

@@ -375,14 +375,6 @@ static rp_status_t run_estimator(rp_pipe_t *pipe, rp_estimate_t *est)
     return rc_step(pipe, est);
 }
 
-/* Stereo layouts: the tracks the estimator retired (rp_vo_stereo.h) go dormant in their pair's
- * first tracker (rp_track_set_dormant): they keep their place, so the detector does not put a
- * new feature on the same spot of a moving object, but no longer fill the tracker's budget,
- * so that it tops up from the rest of the view. (An object that moves with the rig keeps its
- * retired tracks for good; counted, they held the front pair's tracker above its top-up
- * threshold while the scene's tracks left the view, and the pair re-initialised every frame
- * from the few left.) The right trackers are fed, not detecting: nothing to do there. A track
- * stays dormant until it is lost, also when the retired list, full, forgets it. */
 /* 1 if the layout's estimator retired track id (stereo's or gc's list). */
 static int is_retired(const rp_pipe_t *pipe, uint32_t id)
 {
@@ -407,6 +399,15 @@ static void make_dormant(const rp_pipe_t *pipe, rp_tracker_t *T, uint32_t *scrat
     (void)rp_track_set_dormant(T, scratch, m, NULL);
 }
 
+/* Stereo layouts and gc: the tracks the estimator retired (rp_vo_stereo.h, rp_vo_gc.h step 3b)
+ * go dormant in their pair's first tracker (gc: their camera's; rp_track_set_dormant): they
+ * keep their place, so the detector does not put a new feature on the same spot of a moving
+ * object, but no longer fill the tracker's budget, so that it tops up from the rest of the
+ * view. (An object that moves with the rig keeps its
+ * retired tracks for good; counted, they held the front pair's tracker above its top-up
+ * threshold while the scene's tracks left the view, and the pair re-initialised every frame
+ * from the few left.) The right trackers are fed, not detecting: nothing to do there. A track
+ * stays dormant until it is lost, also when the retired list, full, forgets it. */
 static void retired_dormant(rp_pipe_t *pipe)
 {
     if (pipe->cfg.layout == RP_PIPE_GC) {
